@@ -1,0 +1,61 @@
+# Two commands do everything on a fresh Debian 12: `make demo` and `make test`.
+SHELL := /bin/bash
+.SHELLFLAGS := -eo pipefail -c
+WS := $(CURDIR)
+VENV := $(WS)/.venv
+STAMPS := $(WS)/.stamps
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+JOBS ?= 2
+
+# Debian's own ROS 1 (catkin, roscore, roslaunch, rostest, rosbag), OpenCV, Eigen, offscreen Mesa.
+APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip python3-yaml python3-numpy python3-pytest \
+  catkin ros-base-dev python3-rospy python3-roslaunch python3-rostest python3-rosbag python3-rosnode \
+  python3-rostopic python3-rosparam python3-rosservice python3-rosgraph rosbash ros-message-generation \
+  ros-message-runtime libstd-msgs-dev python3-std-msgs libsensor-msgs-dev python3-sensor-msgs \
+  libnav-msgs-dev python3-nav-msgs libgeometry-msgs-dev python3-geometry-msgs python3-rosgraph-msgs \
+  libcv-bridge-dev python3-cv-bridge libimage-transport-dev libtf2-ros-dev python3-tf2-ros \
+  libtf2-geometry-msgs-dev python3-tf2-geometry-msgs libopencv-dev python3-opencv libeigen3-dev \
+  libgtest-dev googletest libosmesa6 libgl1 libglfw3
+
+.PHONY: all deps build test unit-test ros-test demo bench clean
+
+all: build
+
+$(STAMPS)/apt: Makefile
+	@mkdir -p $(STAMPS)
+	@missing=""; for p in $(APT_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "== installing Debian packages:$$missing"; \
+	  $(SUDO) apt-get update -q; \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing; \
+	fi
+	@touch $@
+
+$(STAMPS)/venv: requirements.txt $(STAMPS)/apt
+	@echo "== Python venv (system site-packages for ROS) with pinned packages"
+	/usr/bin/python3 -m venv --system-site-packages $(VENV)
+	$(VENV)/bin/pip install -q --disable-pip-version-check -r requirements.txt
+	@touch $@
+
+deps: $(STAMPS)/venv
+
+build: deps
+	@echo "== catkin_make"
+	export PATH="$(VENV)/bin:$$PATH"; \
+	catkin_make -C $(WS) -j$(JOBS) -DPYTHON_EXECUTABLE=$(VENV)/bin/python -DCMAKE_BUILD_TYPE=Release \
+	  -DCATKIN_ENABLE_TESTING=ON -DSETUPTOOLS_DEB_LAYOUT=OFF > $(WS)/.stamps/build.log 2>&1 \
+	  || { tail -n 60 $(WS)/.stamps/build.log; echo "catkin_make failed: full log in .stamps/build.log"; exit 1; }
+	@echo "== built: source env.sh to use the workspace"
+
+test: build
+	bash tests/run_all.sh
+
+demo: build
+	source env.sh && rosrun mujoco_sim demo_flight
+
+bench: build
+	source env.sh && rosrun mujoco_sim bench_sim
+
+clean:
+	rm -rf build devel install $(STAMPS)

@@ -1,0 +1,62 @@
+"""Run a launch file under its own ROS master on a free port, so several runs can coexist."""
+import os
+import signal
+import socket
+import subprocess
+import time
+
+
+def free_port():
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+class IsolatedLaunch:
+    """``roslaunch -p PORT`` of ``launch_args`` (package, file, arg:=value...) in a new process group.
+
+    Use as a context manager; ``master_uri`` is what clients in this process must use (set
+    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``)."""
+
+    def __init__(self, launch_args, log_path, port=None):
+        self.port = port or free_port()
+        self.master_uri = "http://127.0.0.1:%d" % self.port
+        self.launch_args, self.log_path = list(launch_args), log_path
+        self.process = None
+
+    def __enter__(self):
+        env = dict(os.environ, ROS_MASTER_URI=self.master_uri, ROS_HOSTNAME="127.0.0.1")
+        env.pop("ROS_IP", None)
+        self._log = open(self.log_path, "w")
+        self.process = subprocess.Popen(["roslaunch", "-p", str(self.port), "--screen"]
+                                        + self.launch_args, env=env, stdout=self._log, stderr=subprocess.STDOUT,
+                                        stdin=subprocess.DEVNULL, start_new_session=True)
+        return self
+
+    def wait_for_master(self, timeout=60.0):
+        import rosgraph
+        deadline = time.monotonic() + timeout
+        master = rosgraph.Master("/isolated_launch", master_uri=self.master_uri)
+        while time.monotonic() < deadline:
+            if self.process.poll() is not None:
+                raise RuntimeError("roslaunch exited with code %s; see %s" % (self.process.returncode, self.log_path))
+            try:
+                master.getPid()
+                return
+            except Exception:  # master not up yet
+                time.sleep(0.2)
+        raise TimeoutError("no ROS master on port %d after %.0f s; see %s" % (self.port, timeout, self.log_path))
+
+    def alive(self):
+        return self.process is not None and self.process.poll() is None
+
+    def __exit__(self, *exc):
+        if self.process is not None and self.process.poll() is None:
+            os.killpg(self.process.pid, signal.SIGINT)
+            try:
+                self.process.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.process.pid, signal.SIGKILL)
+                self.process.wait()
+        self._log.close()
+        return False

@@ -1,0 +1,426 @@
+"""ROS wrapper of the simulator: parameters in, commands in, /clock, sensors, ground truth and tf out.
+
+All stamps are sim time computed here (this node is the clock source), so it never waits on /clock.
+"""
+import json
+import math
+import queue
+import sys
+import time
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
+from landing_msgs.msg import Altimeter, Navdata, Touchdown
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
+from std_msgs.msg import Empty, String
+
+from .autopilot import FlightMode
+from .config import ConfigError
+from .schema import SIM_SCHEMA, validate_sim_config
+from .simulator import Simulator
+
+NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF: Navdata.STATE_TAKING_OFF,
+                 FlightMode.FLYING: Navdata.STATE_FLYING, FlightMode.LANDING: Navdata.STATE_LANDING,
+                 FlightMode.CRASHED: Navdata.STATE_CRASHED}
+WHEEL_JOINTS = ["summit_xl_front_left_wheel_joint", "summit_xl_front_right_wheel_joint",
+                "summit_xl_back_left_wheel_joint", "summit_xl_back_right_wheel_joint"]
+# Global condition parameters (thesis names) that change the simulated world, with their checks.
+CONDITION_PARAMS = {name: SIM_SCHEMA["conditions"][name] for name in
+                    ("wind_speed", "wind_direction_deg", "wind_gust", "temp", "drone_battery")}
+
+
+def _quaternion_msg(target, quat_wxyz):
+    target.w, target.x, target.y, target.z = (float(v) for v in quat_wxyz)
+
+
+def _yaw_quaternion(yaw):
+    return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+
+class Schedule:
+    """Fires every ``period`` seconds of sim time."""
+
+    def __init__(self, rate_hz):
+        self.period, self.next = 1.0 / rate_hz, 0.0
+
+    def due(self, t):
+        if t + 1e-9 >= self.next:
+            self.next = max(self.next + self.period, t)
+            return True
+        return False
+
+
+class SimNode:
+    def __init__(self):
+        private = rospy.get_param("~", {})
+        self.model_file = private.pop("model_file", None)
+        if not self.model_file:
+            raise ConfigError("sim_node: required parameter '~model_file' (path of the MJCF world) is not set")
+        self.viewer_requested = bool(private.pop("viewer", False))
+        self.cfg = validate_sim_config(private, "sim_node private parameters (%s)" % rospy.get_name())
+        self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
+        self.actions = queue.SimpleQueue()
+        self.conditions = {}
+        self._init_conditions()
+        self._init_publishers()
+        self._init_subscribers()
+        rates = self.cfg["rates"]
+        self.schedules = {name: Schedule(rates[name + "_hz"]) for name in (
+            "clock", "imu", "ground_truth", "sonar", "altimeter", "gps", "navdata", "joint_states", "tf", "conditions")}
+        self.schedules["camera"] = Schedule(self.cfg["camera"]["rate_hz"])
+        self.schedules["vehicle_gps"] = Schedule(self.sim.vehicle_cfg["gps_rate_hz"])
+        self.schedules["stats"] = Schedule(0.2)
+        self.last_touchdown = None
+        self.timing = {"physics": 0.0, "render": 0.0, "publish": 0.0, "pacing": 0.0}
+
+    # ----- set-up ------------------------------------------------------------------------------
+    def _init_conditions(self):
+        """Start from the global parameters where they are set and valid, else publish ours."""
+        start = self.cfg["conditions"]
+        for name, spec in CONDITION_PARAMS.items():
+            value = start[name]
+            if rospy.has_param("/" + name):
+                value = self._checked_condition(name, rospy.get_param("/" + name), value)
+            self.conditions[name] = value
+            rospy.set_param("/" + name, value)
+        self._apply_conditions()
+        self.battery_written = self.conditions["drone_battery"]
+
+    def _checked_condition(self, name, raw, fallback):
+        try:
+            return CONDITION_PARAMS[name].check(raw, "parameter /%s" % name)
+        except ConfigError as err:
+            rospy.logwarn("rejected %s; keeping %s. Set it with e.g. 'rosparam set /%s %s'.",
+                          err, fallback, name, fallback)
+            return fallback
+
+    def _apply_conditions(self):
+        c = self.conditions
+        self.sim.set_conditions(wind_speed=c["wind_speed"], wind_direction_deg=c["wind_direction_deg"],
+                                gust_mps=c["wind_gust"], temp=c["temp"], battery=c["drone_battery"])
+
+    def _init_publishers(self):
+        pub = lambda topic, kind, size=10, latch=False: rospy.Publisher(topic, kind, queue_size=size, latch=latch)  # noqa: E731
+        self.pub_clock = pub("/clock", Clock, 10)
+        self.pub_image = pub("ardrone/bottom/image_raw", Image, 2)
+        self.pub_info = pub("ardrone/bottom/camera_info", CameraInfo, 2)
+        self.pub_imu = pub("ardrone/imu", Imu)
+        self.pub_sonar = pub("ardrone/sonar_height", Range)
+        self.pub_altimeter = pub("ardrone/altimeter", Altimeter)
+        self.pub_gt_altitude = pub("ardrone/groundtruth_altitude", Altimeter)
+        self.pub_gt_state = pub("ardrone/ground_truth/state", Odometry)
+        self.pub_gps = pub("ardrone/gps/odom", Odometry)
+        self.pub_navdata = pub("ardrone/navdata", Navdata)
+        self.pub_touchdown = pub("ardrone/touchdown", Touchdown, 10, latch=True)
+        self.pub_gt_drone = pub("groundtruth/ardrone", PoseStamped)
+        self.pub_gt_summit = pub("groundtruth/summit", PoseStamped)
+        self.pub_gt_pad = pub("groundtruth/landing_pad", PoseStamped)
+        self.pub_joints = pub("summit_xl/joint_states", JointState)
+        self.pub_vehicle_gps = pub("summit_xl/gps/odom", Odometry)
+        self.pub_stats = pub("sim_stats", String, 1, latch=True)
+        self.tf = tf2_ros.TransformBroadcaster()
+        self.static_tf = tf2_ros.StaticTransformBroadcaster()
+        camera_position, _ = self.sim.camera_pose_in_body()
+        pad_offset = self.sim.pad_offset_in_vehicle()
+        self.static_tf.sendTransform([
+            self._transform("ardrone/base_link", "ardrone/bottom_camera", camera_position,
+                            (0.0, math.sqrt(0.5), -math.sqrt(0.5), 0.0), 0.0),
+            self._transform("summit_xl/base_link", "landing_pad", pad_offset, (1.0, 0.0, 0.0, 0.0), 0.0)])
+        width, height, fx, fy, cx, cy = self.sim.camera_intrinsics()
+        self.camera_info = CameraInfo(width=width, height=height, distortion_model="plumb_bob",
+                                      D=[0.0] * 5, K=[fx, 0, cx, 0, fy, cy, 0, 0, 1],
+                                      R=[1, 0, 0, 0, 1, 0, 0, 0, 1], P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])
+        self.camera_info.header.frame_id = "ardrone/bottom_camera"
+
+    def _init_subscribers(self):
+        rospy.Subscriber("ardrone/cmd_vel", Twist, self._on_cmd_vel, queue_size=1)
+        rospy.Subscriber("summit_xl_control/cmd_vel", Twist, self._on_vehicle_cmd, queue_size=1)
+        rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
+        rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
+        rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
+
+    def _on_cmd_vel(self, msg):
+        problem = self.sim.set_velocity_command(msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.z)
+        if problem:
+            rospy.logwarn_throttle(2.0, "ignored /ardrone/cmd_vel with %s: the drone holds its position; "
+                                        "send finite velocities in m/s and rad/s" % problem)
+
+    def _on_vehicle_cmd(self, msg):
+        problem = self.sim.set_vehicle_command(msg.linear.x, msg.angular.z)
+        if problem:
+            rospy.logwarn_throttle(2.0, "ignored /summit_xl_control/cmd_vel with %s: the vehicle stops; "
+                                        "send finite speeds in m/s and rad/s" % problem)
+
+    # ----- loop ----------------------------------------------------------------------------------
+    def spin(self, max_sim_time=None):
+        rtf = self.cfg["real_time_factor"]
+        wall_start, sim_start = time.monotonic(), self.sim.time
+        viewer = self._open_viewer() if self.viewer_requested else None
+        rospy.loginfo("simulating %s (seed %d) at %s", self.model_file, self.cfg["seed"],
+                      "%gx real time" % rtf if rtf > 0 else "full speed")
+        self.wall_start, self.sim_start = wall_start, sim_start
+        while not rospy.is_shutdown():
+            while not self.actions.empty():
+                self.actions.get()()
+            t0 = time.perf_counter()
+            self.sim.step()
+            t1 = time.perf_counter()
+            self.timing["physics"] += t1 - t0
+            self._publish_due(self.sim.time)
+            self.timing["publish"] += time.perf_counter() - t1
+            if rtf > 0:
+                ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
+                if ahead > 0.002:
+                    time.sleep(ahead)
+                    self.timing["pacing"] += ahead
+            if viewer is not None and self.schedules.setdefault("viewer", Schedule(30.0)).due(self.sim.time):
+                viewer.sync()
+            if max_sim_time is not None and self.sim.time >= max_sim_time:
+                break
+        self.sim.close()
+
+    def _open_viewer(self):
+        try:
+            import mujoco.viewer
+            return mujoco.viewer.launch_passive(self.sim.model, self.sim.data)
+        except Exception as err:  # no display, no GLFW: stay headless rather than die
+            rospy.logwarn("viewer unavailable (%s); running headless", err)
+            return None
+
+    def _publish_due(self, t):
+        due = {name: s.due(t) for name, s in self.schedules.items()}
+        stamp = rospy.Time.from_sec(t)
+        if due["clock"]:
+            self.pub_clock.publish(Clock(clock=stamp))
+        if due["conditions"]:
+            self._sync_conditions()
+        if due["camera"] and self.cfg["camera"]["enabled"] and \
+                (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()):
+            self._publish_camera(stamp)
+        if due["imu"] and self.pub_imu.get_num_connections():
+            self._publish_imu(stamp)
+        if due["sonar"] and self.pub_sonar.get_num_connections():
+            self._publish_sonar(stamp)
+        if due["altimeter"]:
+            self._publish_altimeter(stamp)
+        if due["ground_truth"]:
+            self._publish_ground_truth(stamp)
+        if due["gps"] and self.pub_gps.get_num_connections():
+            self._publish_gps(stamp)
+        if due["vehicle_gps"] and self.pub_vehicle_gps.get_num_connections():
+            self._publish_vehicle_gps(stamp)
+        if due["navdata"]:
+            self._publish_navdata(stamp)
+        if due["joint_states"] and self.pub_joints.get_num_connections():
+            self.pub_joints.publish(JointState(
+                header=self._header(stamp, ""), name=WHEEL_JOINTS,
+                position=[float(a) for a in self.sim.wheel_angles], velocity=[], effort=[]))
+        if due["tf"]:
+            self._publish_tf(stamp)
+        if due["stats"]:
+            self._publish_stats()
+        if self.sim.touchdown is not None and self.sim.touchdown is not self.last_touchdown:
+            self.last_touchdown = self.sim.touchdown
+            self._publish_touchdown(self.sim.touchdown)
+
+    @staticmethod
+    def _header(stamp, frame):
+        msg = Odometry().header
+        msg.stamp, msg.frame_id = stamp, frame
+        return msg
+
+    def _sync_conditions(self):
+        """Read the global condition parameters; mirror the battery level back to /drone_battery."""
+        changed = False
+        for name in CONDITION_PARAMS:
+            try:
+                raw = rospy.get_param_cached("/" + name)  # pushed by the master: no XML-RPC per poll
+                if raw == {}:
+                    raise KeyError(name)
+            except KeyError:
+                rospy.logwarn_throttle(10.0, "parameter /%s was deleted; keeping %s and restoring it" % (
+                    name, self.conditions[name]))
+                rospy.set_param("/" + name, self.conditions[name])
+                continue
+            if name == "drone_battery" and raw == self.battery_written:
+                continue  # our own mirror, not an operator's change
+            if raw != self.conditions[name]:
+                value = self._checked_condition(name, raw, self.conditions[name])
+                if value != self.conditions[name]:
+                    rospy.loginfo("condition /%s: %s -> %s", name, self.conditions[name], value)
+                    self.conditions[name] = value
+                    changed = True
+                elif raw != value:
+                    rospy.set_param("/" + name, value)  # put the rejected value back to the valid one
+        if changed:
+            self._apply_conditions()
+        level = round(self.sim.battery.level, 1)
+        self.conditions["drone_battery"] = level
+        if level != self.battery_written:
+            rospy.set_param("/drone_battery", level)
+            self.battery_written = level
+
+    def _publish_camera(self, stamp):
+        t0 = time.perf_counter()
+        image = self.sim.render_camera()
+        self.timing["render"] += time.perf_counter() - t0
+        msg = Image(header=self._header(stamp, "ardrone/bottom_camera"), height=image.shape[0],
+                    width=image.shape[1], encoding="rgb8", is_bigendian=0, step=image.shape[1] * 3,
+                    data=image.tobytes())
+        self.pub_image.publish(msg)
+        self.camera_info.header.stamp = stamp
+        self.pub_info.publish(self.camera_info)
+
+    def _publish_imu(self, stamp):
+        quat, gyro, accel = self.sim.imu()
+        msg = Imu(header=self._header(stamp, "ardrone/base_link"))
+        _quaternion_msg(msg.orientation, quat)
+        msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = (float(v) for v in gyro)
+        msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z = (float(v) for v in accel)
+        n = self.cfg["noise"]
+        msg.orientation_covariance = _diag(math.radians(n["imu_orientation_std_deg"]) ** 2)
+        msg.angular_velocity_covariance = _diag(n["imu_gyro_std"] ** 2)
+        msg.linear_acceleration_covariance = _diag(n["imu_accel_std"] ** 2)
+        self.pub_imu.publish(msg)
+
+    def _publish_sonar(self, stamp):
+        s = self.cfg["sensors"]
+        self.pub_sonar.publish(Range(header=self._header(stamp, "ardrone/base_link"), radiation_type=Range.ULTRASOUND,
+                                     field_of_view=0.35, min_range=s["sonar_min_range"], max_range=s["sonar_max_range"],
+                                     range=self.sim.sonar()))
+
+    def _publish_altimeter(self, stamp):
+        altitude, pressure = self.sim.altimeter()
+        if self.pub_altimeter.get_num_connections():
+            self.pub_altimeter.publish(Altimeter(header=self._header(stamp, "world"), altitude=altitude,
+                                                 pressure=pressure, qnh=1013.25))
+        if self.pub_gt_altitude.get_num_connections():
+            z = float(self.sim.drone_pose()[0][2])
+            self.pub_gt_altitude.publish(Altimeter(header=self._header(stamp, "world"), altitude=z,
+                                                   pressure=1013.25 * (1.0 - 2.25577e-5 * z) ** 5.25588, qnh=1013.25))
+
+    def _publish_ground_truth(self, stamp):
+        position, quat = self.sim.drone_pose()
+        velocity, omega = self.sim.drone_velocity()
+        if self.pub_gt_state.get_num_connections():
+            odom = Odometry(header=self._header(stamp, "world"), child_frame_id="ardrone/base_link")
+            _fill_pose(odom.pose.pose, position, quat)
+            _fill_vector(odom.twist.twist.linear, velocity)  # world frame, as Gazebo's p3d plugin
+            _fill_vector(odom.twist.twist.angular, omega)
+            self.pub_gt_state.publish(odom)
+        if self.pub_gt_drone.get_num_connections():
+            msg = PoseStamped(header=self._header(stamp, "world"))
+            _fill_pose(msg.pose, position, quat)
+            self.pub_gt_drone.publish(msg)
+        x, y, yaw = self.sim.vehicle_pose()
+        if self.pub_gt_summit.get_num_connections():
+            msg = PoseStamped(header=self._header(stamp, "world"))
+            _fill_pose(msg.pose, (x, y, 0.0), _yaw_quaternion(yaw))
+            self.pub_gt_summit.publish(msg)
+        if self.pub_gt_pad.get_num_connections():
+            msg = PoseStamped(header=self._header(stamp, "world"))
+            _fill_pose(msg.pose, self.sim.pad_position(), _yaw_quaternion(yaw))
+            self.pub_gt_pad.publish(msg)
+
+    def _publish_gps(self, stamp):
+        position, velocity = self.sim.gps()
+        odom = Odometry(header=self._header(stamp, "world"), child_frame_id="ardrone/base_link")
+        _fill_pose(odom.pose.pose, position, (1.0, 0.0, 0.0, 0.0))
+        _fill_vector(odom.twist.twist.linear, velocity)
+        n = self.cfg["noise"]
+        odom.pose.covariance = _diag6(n["gps_position_std"] ** 2, 1e6)
+        odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, 1e6)
+        self.pub_gps.publish(odom)
+
+    def _publish_vehicle_gps(self, stamp):
+        (x, y, yaw), (vx, vy) = self.sim.vehicle_gps()
+        odom = Odometry(header=self._header(stamp, "world"), child_frame_id="summit_xl/base_link")
+        _fill_pose(odom.pose.pose, (x, y, 0.0), _yaw_quaternion(yaw))
+        _fill_vector(odom.twist.twist.linear, (vx, vy, 0.0))
+        n = self.cfg["noise"]
+        odom.pose.covariance = _diag6(n["gps_position_std"] ** 2, math.radians(n["vehicle_heading_std_deg"]) ** 2)
+        odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, 1e6)
+        self.pub_vehicle_gps.publish(odom)
+
+    def _publish_navdata(self, stamp):
+        sim = self.sim
+        _, quat = sim.drone_pose()
+        w, x, y, z = quat
+        roll = math.degrees(math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)))
+        pitch = math.degrees(math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x)))))
+        yaw = math.degrees(math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+        vx, vy, vz = sim.flow_velocity()
+        sonar = sim.sonar()
+        state = NAVDATA_STATE[sim.autopilot.mode]
+        if state == Navdata.STATE_FLYING and abs(vx) < 0.1 and abs(vy) < 0.1 and sim.command.vx == sim.command.vy == 0:
+            state = Navdata.STATE_HOVERING
+        self.pub_navdata.publish(Navdata(
+            header=self._header(stamp, "ardrone/base_link"), state=state, battery_percent=sim.battery.level,
+            altitude=sonar if math.isfinite(sonar) else -1.0, vx=vx, vy=vy, vz=vz, rot_x=roll, rot_y=pitch,
+            rot_z=yaw, motor_thrust=float(sim.autopilot.motor_thrust.sum()) / sim.max_total_thrust))
+
+    def _publish_tf(self, stamp):
+        position, quat = self.sim.drone_pose()
+        x, y, yaw = self.sim.vehicle_pose()
+        self.tf.sendTransform([
+            self._transform("world", "ardrone/base_link", position, quat, stamp),
+            self._transform("world", "summit_xl/base_link", (x, y, 0.0), _yaw_quaternion(yaw), stamp)])
+
+    def _publish_touchdown(self, touchdown):
+        msg = Touchdown(header=self._header(rospy.Time.from_sec(touchdown.time), "world"), surface=touchdown.surface,
+                        crashed=touchdown.crashed, impact_speed=touchdown.impact_speed, tilt_deg=touchdown.tilt_deg,
+                        pad_error=touchdown.pad_error)
+        _fill_vector(msg.position, touchdown.position)
+        self.pub_touchdown.publish(msg)
+        (rospy.logwarn if touchdown.crashed else rospy.loginfo)(touchdown.describe())
+
+    def _publish_stats(self):
+        wall = time.monotonic() - self.wall_start
+        sim_elapsed = self.sim.time - self.sim_start
+        stats = {"sim_time": round(self.sim.time, 3), "wall_time": round(wall, 3),
+                 "real_time_factor": round(sim_elapsed / wall, 3) if wall > 0 else 0.0}
+        stats.update({"%s_share" % k: round(v / wall, 3) if wall > 0 else 0.0 for k, v in self.timing.items()})
+        self.pub_stats.publish(String(data=json.dumps(stats)))
+
+    @staticmethod
+    def _transform(parent, child, position, quat_wxyz, stamp):
+        msg = TransformStamped()
+        msg.header.stamp = stamp if stamp else rospy.Time(0)
+        msg.header.frame_id, msg.child_frame_id = parent, child
+        _fill_vector(msg.transform.translation, position)
+        _quaternion_msg(msg.transform.rotation, quat_wxyz)
+        return msg
+
+
+def _fill_vector(target, values):
+    target.x, target.y, target.z = (float(v) for v in values)
+
+
+def _fill_pose(pose, position, quat_wxyz):
+    _fill_vector(pose.position, position)
+    _quaternion_msg(pose.orientation, quat_wxyz)
+
+
+def _diag(value):
+    return [value, 0.0, 0.0, 0.0, value, 0.0, 0.0, 0.0, value]
+
+
+def _diag6(linear, angular):
+    cov = [0.0] * 36
+    for i in range(3):
+        cov[i * 7] = linear
+        cov[(i + 3) * 7] = angular
+    return cov
+
+
+def main():
+    rospy.init_node("mujoco_sim")
+    try:
+        node = SimNode()
+    except ConfigError as err:
+        rospy.logfatal("mujoco_sim cannot start: %s", err)
+        sys.exit(2)
+    node.spin()

@@ -1,0 +1,127 @@
+"""The simulator's parameters: names, types, ranges and units (documented in config/sim.yaml)."""
+from .config import Param, load_yaml, validate
+
+F, I, B, S = float, int, bool, str
+
+_VEHICLE = {
+    "max_speed": Param(F, 0.0, 40.0, "m/s"),
+    "max_accel": Param(F, 0.01, 20.0, "m/s^2"),
+    "max_yaw_rate": Param(F, 0.0, 5.0, "rad/s"),
+    "max_yaw_accel": Param(F, 0.01, 20.0, "rad/s^2"),
+    "command_timeout": Param(F, 0.05, 60.0, "s"),
+    "wheel_radius": Param(F, 0.01, 1.0, "m"),
+    "track_width": Param(F, 0.1, 3.0, "m"),
+    "gps_rate_hz": Param(F, 0.1, 100.0, "Hz"),
+}
+
+SIM_SCHEMA = {
+    "seed": Param(I, 0),
+    "vehicle": Param(S, choices=("summit_xl", "car")),
+    "real_time_factor": Param(F, 0.0, 1000.0),
+    "camera": {
+        "enabled": Param(B),
+        "width": Param(I, 16, 1920, "px"),
+        "height": Param(I, 16, 1080, "px"),
+        "rate_hz": Param(F, 0.1, 120.0, "Hz"),
+        "noise": Param(F, 0.0, 1.0),
+    },
+    "rates": {
+        "clock_hz": Param(F, 10.0, 1000.0, "Hz"),
+        "imu_hz": Param(F, 1.0, 500.0, "Hz"),
+        "ground_truth_hz": Param(F, 1.0, 500.0, "Hz"),
+        "sonar_hz": Param(F, 1.0, 100.0, "Hz"),
+        "altimeter_hz": Param(F, 1.0, 100.0, "Hz"),
+        "gps_hz": Param(F, 0.1, 100.0, "Hz"),
+        "navdata_hz": Param(F, 1.0, 200.0, "Hz"),
+        "joint_states_hz": Param(F, 1.0, 200.0, "Hz"),
+        "tf_hz": Param(F, 1.0, 200.0, "Hz"),
+        "conditions_hz": Param(F, 0.5, 50.0, "Hz"),
+    },
+    "noise": {
+        "enabled": Param(B),
+        "imu_gyro_std": Param(F, 0.0, 1.0, "rad/s"),
+        "imu_accel_std": Param(F, 0.0, 5.0, "m/s^2"),
+        "imu_orientation_std_deg": Param(F, 0.0, 10.0, "deg"),
+        "sonar_std": Param(F, 0.0, 1.0, "m"),
+        "altimeter_std": Param(F, 0.0, 5.0, "m"),
+        "gps_position_std": Param(F, 0.0, 10.0, "m"),
+        "gps_velocity_std": Param(F, 0.0, 5.0, "m/s"),
+        "vehicle_heading_std_deg": Param(F, 0.0, 30.0, "deg"),
+        "flow_velocity_std": Param(F, 0.0, 5.0, "m/s"),
+    },
+    "sensors": {
+        "sonar_min_range": Param(F, 0.0, 1.0, "m"),
+        "sonar_max_range": Param(F, 0.5, 20.0, "m"),
+    },
+    "drone": {
+        "start_on_pad": Param(B),
+        "start_position": Param(list),
+        "start_yaw_deg": Param(F, -360.0, 360.0, "deg"),
+        "max_horizontal_speed": Param(F, 0.1, 40.0, "m/s"),
+        "max_vertical_speed": Param(F, 0.1, 10.0, "m/s"),
+        "max_yaw_rate": Param(F, 0.1, 10.0, "rad/s"),
+        "max_tilt_deg": Param(F, 1.0, 60.0, "deg"),
+        "takeoff_height": Param(F, 0.1, 10.0, "m"),
+        "takeoff_speed": Param(F, 0.1, 5.0, "m/s"),
+        "land_speed": Param(F, 0.05, 3.0, "m/s"),
+        "command_timeout": Param(F, 0.05, 10.0, "s"),
+        "motor_time_constant": Param(F, 0.001, 1.0, "s"),
+        "velocity_gain": Param(F, 0.0, 50.0, "1/s"),
+        "vertical_velocity_gain": Param(F, 0.0, 50.0, "1/s"),
+        "velocity_integral_gain": Param(F, 0.0, 50.0, "1/s^2"),
+        "velocity_integral_limit": Param(F, 0.0, 100.0, "m"),
+        "altitude_gain": Param(F, 0.0, 50.0, "1/s"),
+        "attitude_gain": Param(F, 0.0, 2000.0, "1/s^2"),
+        "rate_gain": Param(F, 0.0, 200.0, "1/s"),
+        "drag_area_horizontal": Param(F, 0.0, 1.0, "m^2"),
+        "drag_area_vertical": Param(F, 0.0, 1.0, "m^2"),
+    },
+    "vehicle_start": {
+        "x": Param(F, -1e4, 1e4, "m"),
+        "y": Param(F, -1e4, 1e4, "m"),
+        "yaw_deg": Param(F, -360.0, 360.0, "deg"),
+    },
+    "vehicles": {"summit_xl": _VEHICLE, "car": _VEHICLE},
+    "conditions": {
+        "wind_speed": Param(F, 0.0, 60.0, "m/s"),
+        "wind_direction_deg": Param(F, -360.0, 360.0, "deg"),
+        "wind_gust": Param(F, 0.0, 30.0, "m/s"),
+        "temp": Param(F, -60.0, 70.0, "deg C"),
+        "drone_battery": Param(F, 0.0, 100.0, "%"),
+    },
+    "wind": {"gust_time_constant": Param(F, 0.05, 60.0, "s")},
+    "battery": {
+        "initial_percent": Param(F, 0.0, 100.0, "%"),
+        "idle_drain": Param(F, 0.0, 10.0, "%/s"),
+        "thrust_drain": Param(F, 0.0, 10.0, "%/s at full thrust"),
+        "cold_reference_temp": Param(F, -60.0, 70.0, "deg C"),
+        "cold_factor_per_deg": Param(F, 0.0, 1.0, "1/deg C"),
+    },
+    "touchdown": {
+        "crash_speed": Param(F, 0.1, 50.0, "m/s"),
+        "crash_tilt_deg": Param(F, 1.0, 180.0, "deg"),
+    },
+}
+
+
+def validate_sim_config(tree, source):
+    """Validate a parameter tree against SIM_SCHEMA; ConfigError names ``source`` and the key."""
+    config = validate(tree, SIM_SCHEMA, source)
+    start = config["drone"]["start_position"]
+    if len(start) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in start):
+        from .config import ConfigError
+        raise ConfigError("%s: parameter 'drone/start_position': got %r, expected [x, y, z] in m" % (source, start))
+    config["drone"]["start_position"] = [float(v) for v in start]
+    config["battery"]["initial_percent"] = config["conditions"]["drone_battery"]
+    return config
+
+
+def load_sim_config(path, overrides=None):
+    """Read config/sim.yaml (or another file) and apply nested ``overrides`` before validating."""
+    tree = load_yaml(path)
+    for section, values in (overrides or {}).items():
+        if isinstance(values, dict):
+            tree.setdefault(section, {}).update(values)
+        else:
+            tree[section] = values
+    return validate_sim_config(tree, path)

@@ -1,0 +1,261 @@
+"""ROS-free tests of the simulator core: model, autopilot, wind, battery, touchdown, camera."""
+import math
+import os
+
+import numpy as np
+import pytest
+
+from mujoco_sim.autopilot import FlightMode
+from mujoco_sim.config import ConfigError
+from mujoco_sim.schema import load_sim_config
+from mujoco_sim.simulator import SURFACE_GROUND, SURFACE_PAD, Simulator, classify_touchdown
+
+PKG = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+CONFIG = os.path.join(PKG, "config", "sim.yaml")
+
+
+def model(vehicle="summit_xl"):
+    return os.path.join(PKG, "models", "world_%s.xml" % vehicle)
+
+
+def make_sim(vehicle="summit_xl", seed=1, **overrides):
+    return Simulator(load_sim_config(CONFIG, overrides), model(vehicle), vehicle, seed)
+
+
+def run(sim, seconds, command=(0.0, 0.0, 0.0, 0.0), until=None):
+    for _ in range(int(round(seconds / sim.model.opt.timestep))):
+        sim.set_velocity_command(*command)
+        sim.step()
+        if until is not None and until(sim):
+            return True
+    return False
+
+
+def airborne(sim):
+    sim.takeoff()
+    assert run(sim, 10.0, until=lambda s: s.autopilot.mode == FlightMode.FLYING)
+    run(sim, 2.0)
+
+
+@pytest.mark.parametrize("vehicle", ["summit_xl", "car"])
+def test_model_loads_with_drone_resting_on_the_pad(vehicle):
+    sim = make_sim(vehicle)
+    run(sim, 1.0)
+    position, _ = sim.drone_pose()
+    pad = sim.pad_position()
+    assert sim.autopilot.mode == FlightMode.LANDED
+    assert abs(position[2] - pad[2] - 0.065) < 0.01
+    assert math.hypot(position[0] - pad[0], position[1] - pad[1]) < 0.01
+    assert sim.touchdown is None
+
+
+def test_pad_top_height_matches_the_thesis():
+    assert make_sim().pad_position()[2] == pytest.approx(0.497, abs=1e-6)
+
+
+def test_missing_and_malformed_model_files_name_the_file(tmp_path):
+    config = load_sim_config(CONFIG)
+    with pytest.raises(ConfigError, match="nope.xml: model file not found"):
+        Simulator(config, str(tmp_path / "nope.xml"), "summit_xl", 0)
+    broken = tmp_path / "broken.xml"
+    broken.write_text("<mujoco><worldbody><body></mujoco>")
+    with pytest.raises(ConfigError, match="broken.xml: cannot load"):
+        Simulator(config, str(broken), "summit_xl", 0)
+    empty = tmp_path / "empty.xml"
+    empty.write_text("<mujoco/>")
+    with pytest.raises(ConfigError, match="no body named 'ardrone'"):
+        Simulator(config, str(empty), "summit_xl", 0)
+
+
+def test_bad_parameters_are_rejected_with_the_key_and_the_expectation(tmp_path):
+    with pytest.raises(ConfigError, match=r"'conditions/drone_battery': got 150.0, expected a number in \[0, 100\]"):
+        load_sim_config(CONFIG, {"conditions": {"drone_battery": 150}})
+    with pytest.raises(ConfigError, match=r"'conditions/wind_speed': got -3.0"):
+        load_sim_config(CONFIG, {"conditions": {"wind_speed": -3}})
+    with pytest.raises(ConfigError, match="unknown parameter"):
+        load_sim_config(CONFIG, {"camera": {"fps": 30}})
+    text = open(CONFIG).read().replace("  land_speed: 0.5", "")
+    partial = tmp_path / "sim.yaml"
+    partial.write_text(text)
+    with pytest.raises(ConfigError, match="'drone/land_speed' is missing"):
+        load_sim_config(str(partial))
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("seed: [1, 2\n")
+    with pytest.raises(ConfigError, match="bad.yaml: not valid YAML"):
+        load_sim_config(str(bad))
+
+
+def test_hover_holds_altitude_within_5_cm():
+    sim = make_sim()
+    airborne(sim)
+    start = sim.drone_pose()[0].copy()
+    heights = []
+    for _ in range(10):
+        run(sim, 1.0)
+        heights.append(sim.drone_pose()[0][2])
+    assert max(abs(h - start[2]) for h in heights) < 0.05
+    assert start[2] == pytest.approx(0.562 + 1.0, abs=0.1)
+
+
+def test_velocity_step_response_settles():
+    sim = make_sim()
+    airborne(sim)
+    run(sim, 3.0, command=(2.0, 0.0, 0.0, 0.0))
+    samples = []
+    for _ in range(20):
+        run(sim, 0.1, command=(2.0, 0.0, 0.0, 0.0))
+        samples.append(sim.drone_velocity()[0])
+    samples = np.array(samples)
+    assert np.all(np.abs(samples[:, 0] - 2.0) < 0.1)
+    assert np.all(np.abs(samples[:, 1]) < 0.05)
+
+
+def test_commands_are_in_the_heading_frame_and_capped_at_max_speed():
+    sim = make_sim(drone={"max_horizontal_speed": 5.0})
+    airborne(sim)
+    run(sim, 1.6, command=(0.0, 0.0, 0.0, 1.0))  # turn left by about 90 deg
+    run(sim, 6.0, command=(30.0, 0.0, 0.0, 0.0))
+    velocity = sim.drone_velocity()[0]
+    assert math.hypot(velocity[0], velocity[1]) == pytest.approx(5.0, abs=0.3)
+    assert velocity[1] > 4.0  # forward after a left turn is +y
+
+
+def test_absurd_commands_are_refused_and_the_drone_holds():
+    sim = make_sim()
+    airborne(sim)
+    assert "non-finite" in sim.set_velocity_command(float("nan"), 0, 0, 0)
+    assert "absurd" in sim.set_velocity_command(1e6, 0, 0, 0)
+    assert sim.set_vehicle_command(float("inf"), 0) is not None
+    before = sim.drone_pose()[0].copy()
+    for _ in range(500):
+        sim.set_velocity_command(float("nan"), 0, 0, 0)
+        sim.step()
+    assert np.linalg.norm(sim.drone_pose()[0] - before) < 0.1
+
+
+def test_wind_pushes_the_drone_downwind():
+    drift = {}
+    for wind in (0.0, 8.0):
+        sim = make_sim()
+        sim.set_conditions(wind_speed=wind, wind_direction_deg=90.0)
+        airborne(sim)
+        start = sim.drone_pose()[0].copy()
+        run(sim, 1.0)
+        drift[wind] = sim.drone_pose()[0] - start
+    assert drift[8.0][1] > drift[0.0][1] + 0.05
+    assert abs(drift[8.0][0]) < 0.05
+
+
+def test_battery_drains_with_flight_and_faster_in_the_cold():
+    levels = {}
+    for temp in (15.0, -10.0):
+        sim = make_sim()
+        sim.set_conditions(temp=temp, battery=80.0)
+        idle_start = sim.battery.level
+        run(sim, 5.0)
+        idle = idle_start - sim.battery.level
+        airborne(sim)
+        flying_start = sim.battery.level
+        run(sim, 10.0)
+        levels[temp] = (idle, flying_start - sim.battery.level)
+    idle, flying = levels[15.0]
+    assert 0.0 < idle < 0.1
+    assert flying > 0.5  # about 0.14 %/s in hover
+    assert levels[-10.0][1] > 1.5 * flying
+
+
+def test_landing_on_the_moving_pad_is_a_pad_touchdown():
+    sim = make_sim()
+    sim.takeoff()
+    run(sim, 4.0)
+    sim.land()
+    assert run(sim, 10.0, until=lambda s: s.touchdown is not None)
+    assert sim.touchdown.surface == SURFACE_PAD and not sim.touchdown.crashed
+    assert sim.touchdown.pad_error < 0.1
+    assert sim.autopilot.mode == FlightMode.LANDED
+
+
+def test_landing_beside_the_vehicle_is_a_ground_touchdown():
+    sim = make_sim()
+    airborne(sim)
+    run(sim, 4.0, command=(0.0, 1.0, 0.0, 0.0))
+    sim.land()
+    assert run(sim, 10.0, command=(0.0, 0.0, 0.0, 0.0), until=lambda s: s.touchdown is not None)
+    assert sim.touchdown.surface == SURFACE_GROUND and not sim.touchdown.crashed
+    assert sim.touchdown.pad_error > 1.0
+
+
+def test_falling_with_an_empty_battery_is_a_crash():
+    sim = make_sim()
+    airborne(sim)
+    run(sim, 2.0, command=(0.0, 0.0, 2.0, 0.0))
+    sim.set_conditions(battery=0.0)
+    assert run(sim, 5.0, until=lambda s: s.touchdown is not None)
+    assert sim.touchdown.crashed and sim.autopilot.mode == FlightMode.CRASHED
+    assert not sim.takeoff()
+    sim.set_conditions(battery=50.0)
+    sim.reset()
+    assert sim.autopilot.mode == FlightMode.LANDED
+
+
+def test_touchdown_classification_limits():
+    assert classify_touchdown(SURFACE_PAD, 0.5, 3.0, 2.5, 45.0) == (SURFACE_PAD, False)
+    assert classify_touchdown(SURFACE_PAD, 3.0, 3.0, 2.5, 45.0) == (SURFACE_PAD, True)
+    assert classify_touchdown(SURFACE_GROUND, 0.5, 60.0, 2.5, 45.0) == (SURFACE_GROUND, True)
+
+
+def test_vehicle_follows_commands_within_its_acceleration_limit():
+    sim = make_sim()
+    sim.set_vehicle_command(2.0, 0.0)
+    run(sim, 0.5)
+    assert sim.vehicle_velocity()[0] == pytest.approx(0.5, abs=0.05)  # 1 m/s^2
+    for _ in range(10):
+        sim.set_vehicle_command(2.0, 0.0)
+        run(sim, 0.25)
+    assert sim.vehicle_velocity()[0] == pytest.approx(2.0, abs=0.05)
+    assert sim.drone_pose()[0][0] == pytest.approx(sim.pad_position()[0], abs=0.02)  # rides along
+
+
+def red_mask(image):
+    r, g, b = (image[..., i].astype(int) for i in range(3))
+    return (r > 150) & (g < 80) & (b < 80)
+
+
+def test_camera_shows_the_pad_where_it_should_be():
+    sim = make_sim()
+    airborne(sim)
+    run(sim, 3.0, command=(0.0, 0.0, 1.0, 0.0))
+    image = sim.render_camera()
+    width, height, fx, fy, cx, cy = sim.camera_intrinsics()
+    assert image.shape == (240, 320, 3) and fx == pytest.approx(256.0, abs=0.5)
+    mask = red_mask(image)
+    rows, cols = np.nonzero(mask)
+    # The pad seen from straight above at height h: side of fx * 1 m / h pixels, centred.
+    camera_height = sim.drone_pose()[0][2] - 0.035 - 0.497
+    expected_side = fx * 1.0 / camera_height
+    assert math.sqrt(mask.sum()) == pytest.approx(expected_side, rel=0.15)
+    pad_in_camera = sim.pad_position() - sim.drone_pose()[0]
+    # image up is body +x, image right is body -y
+    assert cols.mean() == pytest.approx(cx - fx * pad_in_camera[1] / camera_height, abs=3)
+    assert rows.mean() == pytest.approx(cy - fy * pad_in_camera[0] / camera_height, abs=3)
+    green = (image[..., 1] > 120) & (image[..., 0] < 80)
+    assert green.sum() > 20
+    assert np.nonzero(green)[0].mean() < rows.mean()  # heading strip at the front = image top
+
+
+def test_sensors_measure_height_and_attitude():
+    sim = make_sim()
+    airborne(sim)
+    assert sim.sonar() == pytest.approx(1.0, abs=0.1)  # above the pad
+    quat, gyro, accel = sim.imu()
+    assert accel[2] == pytest.approx(9.81, abs=0.3)
+    assert abs(quat[0]) == pytest.approx(1.0, abs=0.01)
+    altitude, pressure = sim.altimeter()
+    assert altitude == pytest.approx(sim.drone_pose()[0][2], abs=0.5)
+    assert 1000 < pressure < 1014
+
+
+def test_same_seed_same_noise():
+    a, b = make_sim(seed=5), make_sim(seed=5)
+    assert [a.sonar() for _ in range(5)] == [b.sonar() for _ in range(5)]
+    assert make_sim(seed=6).gps()[0][0] != make_sim(seed=5).gps()[0][0]

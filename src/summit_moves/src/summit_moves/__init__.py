@@ -1,0 +1,1 @@
+"""Scripted paths for the ground vehicle carrying the landing pad."""
