@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Every test of the workspace: ROS-free unit tests (pytest), then catkin's gtest and rostest targets.
 # Exits non-zero if anything fails. Logs go to logs/.
-set -uo pipefail
 cd "$(dirname "$0")/.."
-source env.sh
+source env.sh  # before 'set -u': Debian's catkin profile scripts read unset variables
+set -uo pipefail
 export MUJOCO_GL=osmesa LP_NUM_THREADS=0
 mkdir -p logs
 status=0

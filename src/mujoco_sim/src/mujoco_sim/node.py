@@ -103,8 +103,11 @@ class SimNode:
                                 gust_mps=c["wind_gust"], temp=c["temp"], battery=c["drone_battery"])
 
     def _init_publishers(self):
-        pub = lambda topic, kind, size=10, latch=False: rospy.Publisher(topic, kind, queue_size=size, latch=latch)  # noqa: E731
-        self.pub_clock = pub("/clock", Clock, 10)
+        # Small messages are written synchronously: rospy's queued publishers hand every message to a
+        # writer thread per connection, and that hand-off costs more than the socket write itself.
+        def pub(topic, kind, size=None, latch=False):
+            return rospy.Publisher(topic, kind, queue_size=size, latch=latch)
+        self.pub_clock = pub("/clock", Clock)
         self.pub_image = pub("ardrone/bottom/image_raw", Image, 2)
         self.pub_info = pub("ardrone/bottom/camera_info", CameraInfo, 2)
         self.pub_imu = pub("ardrone/imu", Imu)
@@ -195,6 +198,7 @@ class SimNode:
         stamp = rospy.Time.from_sec(t)
         if due["clock"]:
             self.pub_clock.publish(Clock(clock=stamp))
+            rospy.rostime._set_rostime(stamp)  # this node is the clock: it does not listen to /clock
         if due["conditions"]:
             self._sync_conditions()
         if due["camera"] and self.cfg["camera"]["enabled"] and \
@@ -416,8 +420,20 @@ def _diag6(linear, angular):
     return cov
 
 
+def _stop_listening_to_own_clock():
+    """rospy subscribes every node to /clock under /use_sim_time; receiving our own ticks back would
+    only cost CPU, so the simulator sets its rospy time directly instead."""
+    import rospy.impl.simtime as simtime
+    if getattr(simtime, "_clock_sub", None) is not None:
+        simtime._clock_sub.unregister()
+        simtime._clock_sub = None
+
+
 def main():
+    import warnings
+    warnings.filterwarnings("ignore", message=".*queue_size.*")  # synchronous publishing is on purpose
     rospy.init_node("mujoco_sim")
+    _stop_listening_to_own_clock()
     try:
         node = SimNode()
     except ConfigError as err:

@@ -19,6 +19,7 @@ SURFACE_NAMES = {SURFACE_PAD: "pad", SURFACE_GROUND: "ground", SURFACE_VEHICLE: 
 # Optical frame (x right, y down, z forward) of the MuJoCo bottom camera, in the drone body frame.
 CAMERA_OPTICAL_IN_BODY = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 FOOT_CLEARANCE = 0.065  # base_link height above the surface the drone stands on [m]
+DRONE_GEOM_GROUP = 3    # the drone's own geoms, hidden from its bottom camera
 
 
 def classify_touchdown(surface, impact_speed, tilt_deg, crash_speed, crash_tilt_deg):
@@ -405,7 +406,9 @@ class Simulator:
         """RGB image (height, width, 3) uint8 from the bottom camera."""
         if self._renderer is None:
             self._renderer = self._mj.Renderer(self.model, self.cfg["camera"]["height"], self.cfg["camera"]["width"])
-        self._renderer.update_scene(self.data, camera=self.camera)
+            self._camera_view = self._mj.MjvOption()
+            self._camera_view.geomgroup[DRONE_GEOM_GROUP] = 0
+        self._renderer.update_scene(self.data, camera=self.camera, scene_option=self._camera_view)
         image = self._renderer.render()
         std = self.cfg["camera"]["noise"] if noise_std is None else noise_std
         if std > 0.0:

@@ -1,0 +1,1 @@
+"""Supervisor, operator console, launch files, scenario runner, benchmark and flight analysis."""

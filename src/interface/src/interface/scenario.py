@@ -1,0 +1,154 @@
+"""Scenario files (SPEC section 7): loading and validation, ROS-free.
+
+A bad file gives an error that names the file, the field and what is expected, never a silent default
+for a typo: unknown fields are errors too."""
+import math
+import os
+
+import yaml
+
+VEHICLES = ("summit_xl", "car")
+PATHS = ("straight", "circle", "figure8", "back_and_forth", "square", "stop_and_go", "random")
+OPERATOR_ACTIONS = ("landing", "emergency", "manual", "continue", "quit", "takeoff")
+FAULTS = ("camera_blackout", "kill_node", "detection_false_target")
+CONDITION_PARAMS = ("wind_speed", "wind_direction_deg", "wind_gust", "drone_battery", "control_battery", "temp",
+                    "drone_speed")
+OUTCOMES = ("landed_on_pad", "landed_off_pad", "emergency_landed", "crashed", "timeout")
+
+
+class ScenarioError(ValueError):
+    """The scenario file is missing, unreadable or has a bad field."""
+
+
+def _number(value, where, low=-math.inf, high=math.inf, integer=False):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or (integer and not isinstance(value, int)):
+        raise ScenarioError("%s: expected %s, got %r" % (where, "an integer" if integer else "a number", value))
+    if not math.isfinite(value) or value < low or value > high:
+        raise ScenarioError("%s: expected a value in [%g, %g], got %r" % (where, low, high, value))
+    return value if integer else float(value)
+
+
+def _choice(value, where, choices):
+    if value not in choices:
+        raise ScenarioError("%s: expected one of %s, got %r" % (where, ", ".join(choices), value))
+    return value
+
+
+def _mapping(value, where, known):
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ScenarioError("%s: expected a mapping, got %r" % (where, value))
+    unknown = sorted(set(value) - set(known))
+    if unknown:
+        raise ScenarioError("%s: unknown field(s) %s (known: %s)" % (where, ", ".join(map(str, unknown)),
+                                                                       ", ".join(known)))
+    return value
+
+
+def validate(data, source):
+    """Validated scenario dict with every optional field filled in."""
+    top = _mapping(data, source, ("name", "seed", "time_limit_s", "platform", "drone", "conditions", "sensors",
+                                  "events", "expect", "description", "supervisor", "tracking"))
+    if "name" not in top or not isinstance(top["name"], str) or not top["name"]:
+        raise ScenarioError("%s: field 'name' is required (a non-empty string)" % source)
+    out = {"name": top["name"], "description": str(top.get("description", "")),
+           "seed": _number(top.get("seed", 0), "%s: field 'seed'" % source, 0, 2 ** 31 - 1, integer=True),
+           "time_limit_s": _number(top.get("time_limit_s", 180.0), "%s: field 'time_limit_s'" % source, 1.0, 3600.0)}
+
+    where = "%s: field 'platform" % source
+    platform = _mapping(top.get("platform"), where + "'", ("vehicle", "path", "speed_mps", "radius_m"))
+    vehicle = _choice(platform.get("vehicle", "summit_xl"), where + ".vehicle'", VEHICLES)
+    out["platform"] = {
+        "vehicle": vehicle,
+        "path": _choice(platform.get("path", "straight"), where + ".path'", PATHS),
+        "speed_mps": _number(platform.get("speed_mps", 1.0), where + ".speed_mps'", 0.0,
+                             3.0 if vehicle == "summit_xl" else 25.0),
+        "radius_m": _number(platform.get("radius_m", 10.0), where + ".radius_m'", 1.0, 1000.0),
+    }
+
+    where = "%s: field 'drone" % source
+    drone = _mapping(top.get("drone"), where + "'", ("start",))
+    start = drone.get("start", "on_pad")
+    if start == "on_pad":
+        out["drone"] = {"start": "on_pad"}
+    else:
+        start = _mapping(start, where + ".start' (on_pad or {x, y, z})", ("x", "y", "z"))
+        if set(start) != {"x", "y", "z"}:
+            raise ScenarioError("%s.start': expected on_pad or a mapping with x, y and z in m, got %r" % (where, start))
+        out["drone"] = {"start": {k: _number(start[k], "%s.start.%s'" % (where, k), -1e4, 1e4) for k in "xyz"}}
+        if out["drone"]["start"]["z"] < 0.3:
+            raise ScenarioError("%s.start.z': a start away from the pad must be in the air (z >= 0.3 m)" % where)
+
+    where = "%s: field 'conditions" % source
+    conditions = _mapping(top.get("conditions"), where + "'", ("wind_speed", "wind_direction_deg", "gust_mps",
+                                                               "drone_battery", "control_battery", "temp", "drone_speed"))
+    out["conditions"] = {
+        "wind_speed": _number(conditions.get("wind_speed", 0.0), where + ".wind_speed'", 0.0, 60.0),
+        "wind_direction_deg": _number(conditions.get("wind_direction_deg", 0.0), where + ".wind_direction_deg'", -360, 360),
+        "wind_gust": _number(conditions.get("gust_mps", 0.0), where + ".gust_mps'", 0.0, 30.0),
+        "drone_battery": _number(conditions.get("drone_battery", 100.0), where + ".drone_battery'", 0.0, 100.0),
+        "control_battery": _number(conditions.get("control_battery", 100.0), where + ".control_battery'", 0.0, 100.0),
+        "temp": _number(conditions.get("temp", 15.0), where + ".temp'", -60.0, 70.0),
+    }
+    if "drone_speed" in conditions:
+        out["conditions"]["drone_speed"] = _number(conditions["drone_speed"], where + ".drone_speed'", 0.0, 40.0)
+
+    where = "%s: field 'sensors" % source
+    sensors = _mapping(top.get("sensors"), where + "'", ("camera_noise", "camera_fps"))
+    out["sensors"] = {"camera_noise": _number(sensors.get("camera_noise", 0.0), where + ".camera_noise'", 0.0, 1.0),
+                      "camera_fps": _number(sensors.get("camera_fps", 30.0), where + ".camera_fps'", 1.0, 120.0)}
+
+    events = top.get("events", []) or []
+    if not isinstance(events, list):
+        raise ScenarioError("%s: field 'events': expected a list, got %r" % (source, events))
+    out["events"] = [_event(e, "%s: field 'events[%d]" % (source, i)) for i, e in enumerate(events)]
+    out["events"].sort(key=lambda e: e["at_s"])
+    for key in ("expect", "supervisor", "tracking"):
+        value = top.get(key, {}) or {}
+        if not isinstance(value, dict):
+            raise ScenarioError("%s: field '%s': expected a mapping, got %r" % (source, key, value))
+        out[key] = value
+    if "outcome" in out["expect"]:
+        outcomes = out["expect"]["outcome"]
+        for outcome in outcomes if isinstance(outcomes, list) else [outcomes]:
+            _choice(outcome, "%s: field 'expect.outcome'" % source, OUTCOMES)
+    return out
+
+
+def _event(event, where):
+    event = _mapping(event, where + "'", ("at_s", "operator", "set_param", "value", "fault", "duration_s", "name"))
+    if "at_s" not in event:
+        raise ScenarioError("%s.at_s': required (sim seconds)" % where)
+    out = {"at_s": _number(event["at_s"], where + ".at_s'", 0.0, 3600.0)}
+    kinds = [k for k in ("operator", "set_param", "fault") if k in event]
+    if len(kinds) != 1:
+        raise ScenarioError("%s': needs exactly one of operator, set_param, fault; got %s" % (where, kinds or "none"))
+    kind = kinds[0]
+    if kind == "operator":
+        out["operator"] = _choice(event["operator"], where + ".operator'", OPERATOR_ACTIONS)
+    elif kind == "set_param":
+        out["set_param"] = _choice(event["set_param"], where + ".set_param'", CONDITION_PARAMS)
+        if "value" not in event:
+            raise ScenarioError("%s.value': required with set_param" % where)
+        out["value"] = event["value"]  # deliberately unchecked: scenarios test how bad values are handled
+    else:
+        out["fault"] = _choice(event["fault"], where + ".fault'", FAULTS)
+        out["duration_s"] = _number(event.get("duration_s", 2.0), where + ".duration_s'", 0.0, 600.0)
+        if out["fault"] == "kill_node":
+            if not isinstance(event.get("name"), str):
+                raise ScenarioError("%s.name': kill_node needs the node's name" % where)
+            out["name"] = event["name"]
+    return out
+
+
+def load(path):
+    """Read and validate one scenario file."""
+    if not os.path.isfile(path):
+        raise ScenarioError("%s: scenario file not found" % path)
+    try:
+        with open(path) as stream:
+            data = yaml.safe_load(stream)
+    except yaml.YAMLError as err:
+        raise ScenarioError("%s: not valid YAML: %s" % (path, err)) from err
+    return validate(data, path)
