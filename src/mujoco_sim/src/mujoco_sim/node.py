@@ -6,6 +6,7 @@ import json
 import math
 import queue
 import sys
+import threading
 import time
 
 import rospy
@@ -60,6 +61,9 @@ class SimNode:
         if not self.model_file:
             raise ConfigError("sim_node: required parameter '~model_file' (path of the MJCF world) is not set")
         self.viewer_requested = bool(private.pop("viewer", False))
+        # A scenario runner starts the physics only once the whole graph (recorder included) listens.
+        self.wait_for_start = bool(private.pop("wait_for_start", False))
+        self.started = threading.Event()
         self.cfg = validate_sim_config(private, "sim_node private parameters (%s)" % rospy.get_name())
         self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
@@ -144,6 +148,7 @@ class SimNode:
         rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
         rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
         rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
+        rospy.Subscriber("mujoco_sim/start", Empty, lambda _: self.started.set(), queue_size=1)
 
     def _on_cmd_vel(self, msg):
         problem = self.sim.set_velocity_command(msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.z)
@@ -158,7 +163,17 @@ class SimNode:
                                         "send finite speeds in m/s and rad/s" % problem)
 
     # ----- loop ----------------------------------------------------------------------------------
+    def _wait_for_start_signal(self):
+        rospy.loginfo("waiting for std_msgs/Empty on mujoco_sim/start before stepping the physics")
+        # Hold the clock at 1 ms, not 0: nodes such as rosbag record wait for a non-zero time before
+        # they subscribe. The first physics step is 4 ms, so time never runs backwards.
+        waiting_clock = Clock(clock=rospy.Time.from_sec(self.sim.time + 0.001))
+        while self.wait_for_start and not self.started.is_set() and not rospy.is_shutdown():
+            self.pub_clock.publish(waiting_clock)
+            self.started.wait(0.1)
+
     def spin(self, max_sim_time=None):
+        self._wait_for_start_signal()
         rtf = self.cfg["real_time_factor"]
         wall_start, sim_start = time.monotonic(), self.sim.time
         viewer = self._open_viewer() if self.viewer_requested else None

@@ -1,0 +1,230 @@
+"""run_scenario: one scenario, headless, under its own ROS master; writes result.json and the bag.
+
+The flight is scored with the simulator's ground truth (touchdown classification and the resting
+distance from the pad); nothing here feeds ground truth back into the flying system."""
+import argparse
+import json
+import os
+import sys
+import time
+
+from mujoco_sim.isolated_ros import IsolatedLaunch
+
+from . import scenario as scenario_mod
+from . import scoring
+
+SETTLE_AFTER_TOUCHDOWN_S = 1.0  # sim seconds the drone must rest before the outcome is read
+
+
+def launch_arguments(s, bag_path):
+    """roslaunch arguments of interface/scenario.launch for a validated scenario ``s``."""
+    start = s["drone"]["start"]
+    c = s["conditions"]
+    args = {
+        "vehicle": s["platform"]["vehicle"], "path": s["platform"]["path"], "speed": s["platform"]["speed_mps"],
+        "radius": s["platform"]["radius_m"], "seed": s["seed"], "camera_rate": s["sensors"]["camera_fps"],
+        "camera_noise": s["sensors"]["camera_noise"], "start_on_pad": str(start == "on_pad").lower(),
+        "wind_speed": c["wind_speed"], "wind_direction_deg": c["wind_direction_deg"], "wind_gust": c["wind_gust"],
+        "drone_battery": c["drone_battery"], "control_battery": c["control_battery"], "temp": c["temp"],
+        "bag": bag_path,
+    }
+    if start != "on_pad":
+        args.update(start_x=start["x"], start_y=start["y"], start_z=start["z"])
+    return ["%s:=%s" % (k, v) for k, v in args.items()]
+
+
+class EventSchedule:
+    """Scenario events in sim-time order; ``due(t)`` pops those whose time has come."""
+
+    def __init__(self, events):
+        self.pending = list(events)
+
+    def due(self, t):
+        fired = []
+        while self.pending and self.pending[0]["at_s"] <= t:
+            fired.append(self.pending.pop(0))
+        return fired
+
+
+class FlightMonitor:
+    """Watches a run from inside the graph and decides when it is over (ROS-bound part of the runner)."""
+
+    def __init__(self, s, wall_timeout):
+        import rospy
+        from landing_msgs.msg import PositionXYCommand, Touchdown
+        from geometry_msgs.msg import PoseStamped
+        from std_msgs.msg import Empty, String
+        self.rospy, self.s = rospy, s
+        rospy.init_node("scenario_runner", disable_signals=True)
+        self.touchdown, self.touchdown_wall = None, None
+        self.drone, self.pad = None, None
+        self.tracker_state, self.emergency_position = None, None
+        self.decisions, self.emergency_ordered, self.landing_start = [], False, None
+        rospy.Subscriber("ardrone/touchdown", Touchdown, self._on_touchdown)
+        rospy.Subscriber("groundtruth/ardrone", PoseStamped, lambda m: setattr(self, "drone", m.pose.position))
+        rospy.Subscriber("groundtruth/landing_pad", PoseStamped, lambda m: setattr(self, "pad", m.pose.position))
+        rospy.Subscriber("platform_tracking/state", String, lambda m: setattr(self, "tracker_state", m.data))
+        rospy.Subscriber("emergency/position", PositionXYCommand,
+                         lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)]))
+        rospy.Subscriber("supervisor/decisions", String, self._on_decision)
+        self.operator = rospy.Publisher("operator/command", String, queue_size=10, latch=True)
+        self.tracker_command = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
+        self.takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
+        self.wall_deadline = time.monotonic() + wall_timeout
+
+    def _on_touchdown(self, msg):
+        if self.touchdown is None or msg.header.stamp.to_sec() > self.touchdown.header.stamp.to_sec():
+            self.touchdown = msg
+
+    def _on_decision(self, msg):
+        try:
+            decision = json.loads(msg.data)
+        except ValueError:
+            return
+        self.decisions.append(decision)
+        if decision.get("action") == "emergency_landing":
+            self.emergency_ordered = True
+
+    def start(self, recorded, timeout=120.0):
+        """Once the recorder and the landing stack (if any) listen, release the simulator's physics."""
+        from std_msgs.msg import Empty
+        import rosgraph
+        master = rosgraph.Master("/scenario_runner")
+        deadline = time.monotonic() + timeout
+
+        def ready():
+            subscribers = {topic: nodes for topic, nodes in master.getSystemState()[1]}
+            recorder_ready = not recorded or "/flight_recorder" in subscribers.get("/ardrone/navdata", [])
+            return recorder_ready and (not self.s.get("_needs_tracker") or self.tracker_state is not None)
+        while not ready():
+            if time.monotonic() > deadline:
+                raise TimeoutError("the graph was not ready within %.0f s (tracker state %r)"
+                                   % (timeout, self.tracker_state))
+            time.sleep(0.1)
+        start = self.rospy.Publisher("mujoco_sim/start", Empty, queue_size=1, latch=True)
+        start.publish(Empty())
+        while self.rospy.get_time() <= 0.0:
+            if time.monotonic() > deadline:
+                raise TimeoutError("the simulator did not start within %.0f s" % timeout)
+            time.sleep(0.02)
+
+    def apply(self, event):
+        from std_msgs.msg import String
+        rospy = self.rospy
+        rospy.loginfo("scenario event at t=%.2f: %s", rospy.get_time(), event)
+        if "operator" in event:
+            action = event["operator"]
+            self.operator.publish(String(data=action))
+            if action in ("landing", "takeoff"):
+                self.landing_start = self.landing_start or rospy.get_time()
+                # Without the supervisor in the graph, the landing mode is the tracker's own take-off.
+                self.tracker_command.publish(String(data="takeoff"))
+            if action == "emergency":
+                self.emergency_ordered = True
+        elif "set_param" in event:
+            rospy.set_param("/" + event["set_param"], event["value"])
+
+    def run(self, schedule, time_limit):
+        rospy = self.rospy
+        while True:
+            t = rospy.get_time()
+            for event in schedule.due(t):
+                self.apply(event)
+            if self.touchdown is not None:
+                touchdown_time = self.touchdown.header.stamp.to_sec()
+                if self.touchdown.crashed or t >= touchdown_time + SETTLE_AFTER_TOUCHDOWN_S:
+                    return
+            if t >= time_limit:
+                return
+            if time.monotonic() > self.wall_deadline:
+                raise TimeoutError("wall-clock limit reached at sim time %.1f s" % t)
+            time.sleep(0.02)
+
+    def resting_pad_error(self):
+        if self.drone is None or self.pad is None:
+            return None
+        return ((self.drone.x - self.pad.x) ** 2 + (self.drone.y - self.pad.y) ** 2) ** 0.5
+
+
+def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True):
+    """Run one scenario; returns the result dict (also written to out_dir/result.json)."""
+    s = scenario_mod.load(scenario_path)
+    s["_needs_tracker"] = landing_stack
+    os.makedirs(out_dir, exist_ok=True)
+    bag = os.path.abspath(os.path.join(out_dir, "flight.bag"))
+    events = s["events"] if any("operator" in e for e in s["events"]) else \
+        [{"at_s": 0.0, "operator": "landing"}] + s["events"]
+    launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower()] + launch_arguments(s, bag)
+    wall_start = time.monotonic()
+    wall_timeout = wall_timeout or max(300.0, 4.0 * s["time_limit_s"])
+    result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path)}
+    with IsolatedLaunch(launch, os.path.join(out_dir, "launch.log")) as ros:
+        os.environ["ROS_MASTER_URI"] = ros.master_uri
+        ros.wait_for_master()
+        monitor = FlightMonitor(s, wall_timeout)
+        monitor.start(recorded=True)
+        sim_start = monitor.rospy.get_time()
+        wall_flight_start = time.monotonic()
+        try:
+            monitor.run(EventSchedule(events), s["time_limit_s"])
+            error = None
+        except TimeoutError as err:
+            error = str(err)
+        sim_time = monitor.rospy.get_time()
+        flight_wall = time.monotonic() - wall_flight_start
+        outcome, touchdown_error = scoring.outcome(monitor.touchdown, monitor.resting_pad_error(),
+                                                   monitor.emergency_ordered)
+        touchdown_time = monitor.touchdown.header.stamp.to_sec() if monitor.touchdown else None
+        result.update({
+            "outcome": outcome if error is None else "timeout",
+            "touchdown_error_m": touchdown_error,
+            "time_to_land_s": round(touchdown_time - (monitor.landing_start or sim_start), 3)
+            if touchdown_time is not None and not monitor.touchdown.crashed else None,
+            "decisions": monitor.decisions,
+            "emergency_position": monitor.emergency_position,
+            "sim_time_s": round(sim_time, 3),
+            "real_time_factor": round((sim_time - sim_start) / flight_wall, 3) if flight_wall > 0 else None,
+            "touchdown": None if monitor.touchdown is None else {
+                "surface": {1: "pad", 2: "ground", 3: "vehicle"}.get(monitor.touchdown.surface, "unknown"),
+                "crashed": monitor.touchdown.crashed, "impact_speed_mps": round(monitor.touchdown.impact_speed, 3),
+                "pad_error_m": round(monitor.touchdown.pad_error, 4),
+                "resting_pad_error_m": None if monitor.resting_pad_error() is None
+                else round(monitor.resting_pad_error(), 4),
+                "position": [round(monitor.touchdown.position.x, 3), round(monitor.touchdown.position.y, 3),
+                             round(monitor.touchdown.position.z, 3)]},
+            "tracker_final_state": monitor.tracker_state,
+            "error": error,
+        })
+        monitor.rospy.signal_shutdown("scenario finished")
+    result["wall_time_s"] = round(time.monotonic() - wall_start, 2)
+    result["bag"] = bag if os.path.isfile(bag) else None
+    with open(os.path.join(out_dir, "result.json"), "w") as stream:
+        json.dump(result, stream, indent=2)
+    return result
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description="Run one landing scenario headless; write result.json and flight.bag.")
+    parser.add_argument("scenario", help="scenario YAML file (SPEC section 7)")
+    parser.add_argument("--out", required=True, help="output directory")
+    parser.add_argument("--wall-timeout", type=float, default=None, help="wall-clock limit [s]")
+    parser.add_argument("--no-landing-stack", action="store_true", help="simulator and vehicle only")
+    args = parser.parse_args(argv)
+    try:
+        result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack)
+    except scenario_mod.ScenarioError as err:
+        print("run_scenario: %s" % err, file=sys.stderr)
+        return 2
+    except (RuntimeError, TimeoutError) as err:
+        print("run_scenario: %s (logs in %s)" % (err, args.out), file=sys.stderr)
+        return 3
+    summary = "%(name)s: %(outcome)s" % result
+    if result["touchdown_error_m"] is not None:
+        summary += ", touchdown error %.3f m" % result["touchdown_error_m"]
+    if result["time_to_land_s"] is not None:
+        summary += ", landed after %.1f s" % result["time_to_land_s"]
+    summary += " (sim %.1f s in %.1f s wall, %.1fx)" % (result["sim_time_s"], result["wall_time_s"],
+                                                       result["real_time_factor"] or 0.0)
+    print(summary)
+    print("result: %s" % os.path.join(args.out, "result.json"))
+    return 0
