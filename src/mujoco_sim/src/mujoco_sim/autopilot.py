@@ -57,11 +57,6 @@ def yaw_of(rotation):
     return math.atan2(rotation[1, 0], rotation[0, 0])
 
 
-def cross(a, b):
-    """3-vector cross product; numpy.cross costs ~25 us per call, which matters at 500 Hz."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def wrap_angle(angle):
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
@@ -81,14 +76,15 @@ class Autopilot:
                         [y for x, y, k in rotors],
                         [-x for x, y, k in rotors],
                         [k for x, y, k in rotors]])
-        self.unmix = np.linalg.inv(mix)
+        self.unmix_rows = [tuple(float(v) for v in row) for row in np.linalg.inv(mix)]
+        self.inertia_tuple = tuple(float(v) for v in self.inertia)
         self.motor_thrust = np.zeros(len(rotors))
         self.mode = FlightMode.LANDED
         self._reset_loops()
 
     # ----- modes ---------------------------------------------------------------------------
     def _reset_loops(self):
-        self.velocity_integral = np.zeros(3)
+        self.velocity_integral = [0.0, 0.0, 0.0]
         self.z_ref = None
         self.yaw_ref = None
         self.takeoff_target_z = None
@@ -144,10 +140,17 @@ class Autopilot:
         return self.motor_thrust
 
     def _thrusts(self, dt, position, velocity, quat, omega, command):
+        # Plain floats on purpose: this runs 250 times per sim second and numpy's per-call overhead on
+        # 3-vectors cost more than the whole physics step.
         p = self.p
-        rotation = quat_to_matrix(quat)
-        yaw = yaw_of(rotation)
-        z = position[2]
+        w, x, y, z_q = (float(v) for v in quat)
+        # Columns of the body rotation (world <- body).
+        r1 = (1 - 2 * (y * y + z_q * z_q), 2 * (x * y + w * z_q), 2 * (x * z_q - w * y))
+        r2 = (2 * (x * y - w * z_q), 1 - 2 * (x * x + z_q * z_q), 2 * (y * z_q + w * x))
+        r3 = (2 * (x * z_q + w * y), 2 * (y * z_q - w * x), 1 - 2 * (x * x + y * y))
+        yaw = math.atan2(r1[1], r1[0])
+        z = float(position[2])
+        vx, vy, vz = (float(v) for v in velocity)
 
         if self.mode == FlightMode.TAKING_OFF:
             climb = p["takeoff_speed"]
@@ -161,32 +164,34 @@ class Autopilot:
 
         # Horizontal velocity set-point: heading frame -> world, capped at the maximum speed.
         c, s = math.cos(yaw), math.sin(yaw)
-        v_set = np.array([c * command.vx - s * command.vy, s * command.vx + c * command.vy])
-        speed = math.hypot(v_set[0], v_set[1])
+        set_x, set_y = c * command.vx - s * command.vy, s * command.vx + c * command.vy
+        speed = math.hypot(set_x, set_y)
         if speed > p["max_horizontal_speed"]:
-            v_set *= p["max_horizontal_speed"] / speed
+            set_x, set_y = (v * p["max_horizontal_speed"] / speed for v in (set_x, set_y))
 
         # Vertical: altitude hold around a reference that the climb rate moves.
         if self.z_ref is None or self.mode != FlightMode.FLYING or abs(command.vz) > 1e-3:
             self.z_ref = z
-        vz_set = climb + p["altitude_gain"] * (self.z_ref - z)
+        set_z = climb + p["altitude_gain"] * (self.z_ref - z)
 
-        error = np.array([v_set[0] - velocity[0], v_set[1] - velocity[1], vz_set - velocity[2]])
+        error = (set_x - vx, set_y - vy, set_z - vz)
         # Integrate only near the set-point: the integral is for wind and drag, and integrating the
         # large errors of a step command would make it overshoot.
-        self.velocity_integral += np.where(np.abs(error) < 0.5, error, 0.0) * dt
         limit = p["velocity_integral_limit"]
-        self.velocity_integral = np.minimum(np.maximum(self.velocity_integral, -limit), limit)
-        accel = p["velocity_gain"] * error + p["velocity_integral_gain"] * self.velocity_integral
-        accel[2] = p["vertical_velocity_gain"] * error[2] + p["velocity_integral_gain"] * self.velocity_integral[2]
+        self.velocity_integral = [max(-limit, min(limit, i + (e * dt if abs(e) < 0.5 else 0.0)))
+                                  for i, e in zip(self.velocity_integral, error)]
+        ki = p["velocity_integral_gain"]
+        accel = (p["velocity_gain"] * error[0] + ki * self.velocity_integral[0],
+                 p["velocity_gain"] * error[1] + ki * self.velocity_integral[1],
+                 p["vertical_velocity_gain"] * error[2] + ki * self.velocity_integral[2])
 
         # Thrust vector with the tilt limit: horizontal part may use at most tan(max_tilt) of the vertical.
-        force = self.mass * (accel + np.array([0.0, 0.0, 9.81]))
-        force[2] = max(force[2], 0.2 * self.mass * 9.81)
-        max_horizontal = force[2] * math.tan(math.radians(p["max_tilt_deg"]))
-        horizontal = math.hypot(force[0], force[1])
+        m = self.mass
+        fx, fy, fz = m * accel[0], m * accel[1], max(m * (accel[2] + 9.81), 0.2 * m * 9.81)
+        max_horizontal = fz * math.tan(math.radians(p["max_tilt_deg"]))
+        horizontal = math.hypot(fx, fy)
         if horizontal > max_horizontal:
-            force[:2] *= max_horizontal / horizontal
+            fx, fy = fx * max_horizontal / horizontal, fy * max_horizontal / horizontal
 
         # Yaw reference follows the commanded rate, kept near the actual yaw to avoid wind-up.
         yaw_rate = max(-p["max_yaw_rate"], min(p["max_yaw_rate"], command.yaw_rate))
@@ -195,18 +200,34 @@ class Autopilot:
         self.yaw_ref = yaw + max(-0.5, min(0.5, wrap_angle(self.yaw_ref + yaw_rate * dt - yaw)))
 
         # Geometric attitude control (Lee et al.): desired body z along the thrust vector.
-        b3 = force / np.linalg.norm(force)
-        b1c = np.array([math.cos(self.yaw_ref), math.sin(self.yaw_ref), 0.0])
-        b2 = cross(b3, b1c)
-        b2 /= np.linalg.norm(b2)
-        desired = np.column_stack((cross(b2, b3), b2, b3))
-        e_matrix = desired.T @ rotation - rotation.T @ desired
-        e_rot = 0.5 * np.array([e_matrix[2, 1], e_matrix[0, 2], e_matrix[1, 0]])
-        e_rate = omega - np.array([0.0, 0.0, yaw_rate])
-        torque = self.inertia * (-p["attitude_gain"] * e_rot - p["rate_gain"] * e_rate) \
-            + cross(omega, self.inertia * omega)
+        norm = math.sqrt(fx * fx + fy * fy + fz * fz)
+        d3 = (fx / norm, fy / norm, fz / norm)
+        b1c = (math.cos(self.yaw_ref), math.sin(self.yaw_ref), 0.0)
+        d2 = _cross(d3, b1c)
+        n2 = math.sqrt(_dot(d2, d2))
+        d2 = (d2[0] / n2, d2[1] / n2, d2[2] / n2)
+        d1 = _cross(d2, d3)
+        # e_R = vee(Rd^T R - R^T Rd) / 2, written out entry by entry.
+        e_rot = (0.5 * (_dot(d3, r2) - _dot(r3, d2)), 0.5 * (_dot(d1, r3) - _dot(r1, d3)),
+                 0.5 * (_dot(d2, r1) - _dot(r2, d1)))
+        wx, wy, wz = (float(v) for v in omega)
+        e_rate = (wx, wy, wz - yaw_rate)
+        ix, iy, iz = self.inertia_tuple
+        gyroscopic = _cross((wx, wy, wz), (ix * wx, iy * wy, iz * wz))
+        ka, kr = p["attitude_gain"], p["rate_gain"]
+        torque = [inertia * (-ka * er - kr * ew) + g
+                  for inertia, er, ew, g in zip(self.inertia_tuple, e_rot, e_rate, gyroscopic)]
 
-        thrust = float(force @ rotation[:, 2])
+        thrust = fx * r3[0] + fy * r3[1] + fz * r3[2]
         thrust = max(0.0, min(thrust, self.max_rotor_thrust * len(self.motor_thrust)))
-        rotor = self.unmix @ np.array([thrust, torque[0], torque[1], torque[2]])
-        return np.minimum(np.maximum(rotor, 0.0), self.max_rotor_thrust)
+        wrench = (thrust, torque[0], torque[1], torque[2])
+        return np.array([max(0.0, min(self.max_rotor_thrust, sum(a * b for a, b in zip(row, wrench))))
+                         for row in self.unmix_rows])
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]

@@ -82,6 +82,8 @@ class Simulator:
         self.camera = name2id(obj.mjOBJ_CAMERA, "bottom_camera")
         self.rotor_actuators = [name2id(obj.mjOBJ_ACTUATOR, n) for n in ("rotor_fl", "rotor_fr", "rotor_rl", "rotor_rr")]
         self.vehicle_actuators = [name2id(obj.mjOBJ_ACTUATOR, n) for n in ("vehicle_vx", "vehicle_vy", "vehicle_wz")]
+        self.rotor_ctrl = _as_slice(self.rotor_actuators)      # slices write faster than index lists
+        self.vehicle_ctrl = _as_slice(self.vehicle_actuators)
         self.drone_qpos = m.jnt_qposadr[m.body_jntadr[self.drone_body]]
         self.drone_qvel = m.jnt_dofadr[m.body_jntadr[self.drone_body]]
         self.vehicle_qpos = m.jnt_qposadr[m.body_jntadr[self.vehicle_body]]  # x, y, yaw in a row
@@ -117,7 +119,7 @@ class Simulator:
         self.vehicle_target = (0.0, 0.0)      # commanded (v, omega)
         self.vehicle_command = [0.0, 0.0]     # after acceleration limits
         self.vehicle_command_time = -1e9
-        self.wheel_angles = np.zeros(4)
+        self.wheel_angles = [0.0, 0.0, 0.0, 0.0]
         self.touchdown = None                 # last Touchdown
         self.touchdowns = []
         self._takeoff_z = None
@@ -226,25 +228,28 @@ class Simulator:
         velocity = d.qvel[qv:qv + 3].copy()
         omega = d.qvel[qv + 3:qv + 6]  # free joint angular velocity is in the body frame
 
-        if self.time - self.command_time > self.cfg["drone"]["command_timeout"]:
+        now = float(d.time)
+        if now - self.command_time > self.cfg["drone"]["command_timeout"]:
             self.command = HOLD
         self.wind.step(dt)
         airborne = self.autopilot.airborne_control
-        d.xfrc_applied[self.drone_body, :3] = aerodynamic_force(self.wind.velocity(), velocity, self.drag_area) \
-            if airborne or position[2] > 0.3 else 0.0
+        if airborne or position[2] > 0.3:
+            d.xfrc_applied[self.drone_body, :3] = aerodynamic_force(self.wind.velocity(), velocity, self.drag_area)
+        else:
+            d.xfrc_applied[self.drone_body, :3] = 0.0
         thrusts = self.autopilot.update(dt, position, velocity, quat, omega, self.command,
                                         power_available=not self.battery.empty)
-        d.ctrl[self.rotor_actuators] = thrusts
-        self._drive_vehicle(dt)
+        d.ctrl[self.rotor_ctrl] = thrusts
+        self._drive_vehicle(dt, now)
         self._mj.mj_step(m, d)
         thrust_fraction = float(thrusts.sum()) / self.max_total_thrust
         self.battery.step(dt, thrust_fraction, self.temperature, motors_on=airborne)
         if d.ncon:
             self._check_contacts(velocity)
 
-    def _drive_vehicle(self, dt):
+    def _drive_vehicle(self, dt, now):
         vc = self.vehicle_cfg
-        if self.time - self.vehicle_command_time > vc["command_timeout"]:
+        if now - self.vehicle_command_time > vc["command_timeout"]:
             self.vehicle_target = (0.0, 0.0)
         target_v = max(-vc["max_speed"], min(vc["max_speed"], self.vehicle_target[0]))
         target_w = max(-vc["max_yaw_rate"], min(vc["max_yaw_rate"], self.vehicle_target[1]))
@@ -253,10 +258,14 @@ class Simulator:
         w += max(-vc["max_yaw_accel"] * dt, min(vc["max_yaw_accel"] * dt, target_w - w))
         self.vehicle_command = [v, w]
         yaw = float(self.data.qpos[self.vehicle_qpos + 2])
-        self.data.ctrl[self.vehicle_actuators] = (v * math.cos(yaw), v * math.sin(yaw), w)
+        self.data.ctrl[self.vehicle_ctrl] = (v * math.cos(yaw), v * math.sin(yaw), w)
         half_track = vc["track_width"] / 2
         left, right = (v - w * half_track) / vc["wheel_radius"], (v + w * half_track) / vc["wheel_radius"]
-        self.wheel_angles += dt * np.array([left, right, left, right])
+        angles = self.wheel_angles
+        angles[0] += dt * left
+        angles[1] += dt * right
+        angles[2] += dt * left
+        angles[3] += dt * right
 
     def _check_contacts(self, velocity_before):
         mode = self.autopilot.mode
@@ -420,6 +429,13 @@ class Simulator:
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+
+def _as_slice(indices):
+    """A slice when the indices are consecutive (the usual case), else the list itself."""
+    if list(indices) == list(range(indices[0], indices[0] + len(indices))):
+        return slice(indices[0], indices[0] + len(indices))
+    return indices
 
 
 def _quat_multiply(a, b):
