@@ -1,0 +1,218 @@
+"""Operator console (replaces the thesis' Tk menus): a live Flight Management panel in the terminal,
+commands by key, by stdin line or by argument; every action goes out on operator/command."""
+import argparse
+import json
+import math
+import os
+import select
+import sys
+import termios
+import threading
+import time
+import tty
+
+from .console_model import PANEL, ConsoleModel, Screen
+
+SENSOR_TOPICS = {"camera": "ardrone/bottom/image_raw", "imu": "ardrone/imu", "odometry": "ardrone/gps/odom",
+                 "sonar": "ardrone/sonar_height"}
+SENSOR_TIMEOUT_S = 1.0  # a sensor silent for longer (sim time) is shown as missing
+
+
+def render_plain(model, sim_time):
+    """The panel as plain text lines (for pipes, logs and tests)."""
+    lines = ["== %s ==  t=%.1f s  mode=%s  tracker=%s" % (model.title(), sim_time, model.mode, model.tracker_state)]
+    for row in model.rows():
+        lines.append("%s %-26s %-28s %s" % ("!" if row.alarm else " ", row.label, row.text, row.note))
+    if model.warning:
+        remaining = float(model.warning.get("deadline", sim_time)) - sim_time
+        lines.append("WARNING: %s -> answer %s within %.0f s, else emergency landing" % (
+            model.warning.get("message", ""), "/".join(model.warning.get("options", [])), max(0.0, remaining)))
+    if model.emergency_position is not None:
+        lines.append("EMERGENCY: drone at x=%.2f m, y=%.2f m (press a to acknowledge)" % model.emergency_position)
+    lines.append("actions: " + " | ".join(model.actions()))
+    return lines
+
+
+def render_rich(model, sim_time):
+    from rich.console import Group
+    from rich.panel import Panel
+    from rich.table import Table
+    from rich.text import Text
+    table = Table(show_header=False, box=None, expand=True)
+    table.add_column(width=28)
+    table.add_column(width=30)
+    table.add_column()
+    for row in model.rows():
+        style = "bold white on red" if row.alarm else ""
+        table.add_row(row.label, Text(row.text, style=style), Text(row.note, style="yellow"))
+    parts = [table]
+    if model.warning:
+        remaining = max(0.0, float(model.warning.get("deadline", sim_time)) - sim_time)
+        parts.append(Panel(Text("%s\nanswer %s within %.0f s, else the drone lands on the ground" % (
+            model.warning.get("message", ""), " / ".join(model.warning.get("options", [])), remaining),
+            style="bold yellow"), title="WARNING"))
+    if model.emergency_position is not None:
+        parts.append(Panel(Text("drone coordinates: x = %.2f m, y = %.2f m" % model.emergency_position,
+                                style="bold red"), title="Emergency Mode"))
+    parts.append(Text("\n".join(model.log[-5:]), style="dim"))
+    parts.append(Text("   ".join(model.actions()), style="bold cyan"))
+    subtitle = "t = %.1f s   mode: %s   tracker: %s" % (sim_time, model.mode, model.tracker_state or "-")
+    return Panel(Group(*parts), title=model.title(), subtitle=subtitle)
+
+
+class ConsoleNode:
+    def __init__(self, model, plain):
+        import rospy
+        from landing_msgs.msg import Navdata, PositionXYCommand
+        from nav_msgs.msg import Odometry
+        from std_msgs.msg import String
+        self.rospy, self.model, self.plain = rospy, model, plain
+        self.lock = threading.Lock()
+        self.last_seen = {}
+        self.publisher = rospy.Publisher("operator/command", String, queue_size=10)
+        rospy.Subscriber("supervisor/mode", String, lambda m: self._set(mode=m.data))
+        rospy.Subscriber("platform_tracking/state", String, lambda m: self._set(tracker_state=m.data))
+        rospy.Subscriber("supervisor/decisions", String, self._on_decision)
+        rospy.Subscriber("supervisor/warning", String, self._on_warning)
+        rospy.Subscriber("emergency/position", PositionXYCommand,
+                         lambda m: self._set(emergency_position=(m.x, m.y)))
+        rospy.Subscriber("ardrone/navdata", Navdata, self._on_navdata)
+        for name, topic in SENSOR_TOPICS.items():
+            rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
+        rospy.Subscriber("ardrone/odom_estimate", Odometry, self._on_odometry, queue_size=1)
+
+    def _set(self, **values):
+        with self.lock:
+            for key, value in values.items():
+                setattr(self.model, key, value)
+
+    def _seen(self, name):
+        def callback(_):
+            self.last_seen[name] = self.rospy.get_time()
+        return callback
+
+    def _on_decision(self, msg):
+        try:
+            decision = json.loads(msg.data)
+        except ValueError:
+            return
+        with self.lock:
+            self.model.on_decision(decision)
+
+    def _on_warning(self, msg):
+        try:
+            warning = json.loads(msg.data) if msg.data else None
+        except ValueError:
+            warning = None
+        with self.lock:
+            self.model.on_warning(warning)
+
+    def _on_navdata(self, msg):
+        with self.lock:
+            self.model.flight_speed = math.hypot(msg.vx, msg.vy)
+
+    def _on_odometry(self, msg):
+        v = msg.twist.twist.linear
+        with self.lock:
+            self.model.flight_speed = math.hypot(v.x, v.y)
+
+    def refresh(self):
+        """Read the condition parameters (cached, pushed by the master) and the sensor ages."""
+        now = self.rospy.get_time()
+        with self.lock:
+            for key, _, _ in PANEL:
+                if key == "sensors":
+                    continue
+                try:
+                    value = self.rospy.get_param_cached("/" + key)
+                    self.model.set_value(key, None if value == {} else value)
+                except KeyError:
+                    self.model.set_value(key, None)
+            for name in SENSOR_TOPICS:
+                seen = self.last_seen.get(name)
+                self.model.set_sensor(name, seen is not None and now - seen <= SENSOR_TIMEOUT_S)
+        return now
+
+    def command(self, text):
+        from std_msgs.msg import String
+        with self.lock:
+            command, reply = self.model.handle(text)
+        if command:
+            self.publisher.publish(String(data=command))
+        if reply:
+            with self.lock:
+                self.model.note(reply)
+            if self.plain:
+                print(reply, flush=True)
+        return command
+
+
+def _read_keys(on_key, stop):
+    """Single keys from a terminal in cbreak mode; the terminal is restored on exit."""
+    fd = sys.stdin.fileno()
+    saved = termios.tcgetattr(fd)
+    try:
+        tty.setcbreak(fd)
+        while not stop.is_set():
+            ready, _, _ = select.select([sys.stdin], [], [], 0.2)
+            if ready:
+                on_key(sys.stdin.read(1))
+    finally:
+        termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+
+def _read_lines(on_line, stop):
+    for line in sys.stdin:
+        on_line(line)
+        if stop.is_set():
+            break
+
+
+def main(argv=None):
+    import rospy
+    parser = argparse.ArgumentParser(description="Operator console of the landing system.")
+    parser.add_argument("--commands", default="", help="commands to run first, separated by ';' "
+                        "(e.g. 'start;landing'); 'wait N' waits N sim seconds")
+    parser.add_argument("--plain", action="store_true", help="plain text output even on a terminal")
+    parser.add_argument("--period", type=float, default=1.0, help="panel refresh period [s]")
+    args = parser.parse_args(rospy.myargv(argv if argv is not None else sys.argv)[1:])
+    rospy.init_node("operator_console", disable_signals=True)
+    interactive = sys.stdin.isatty() and not args.plain
+    model = ConsoleModel(ranges=rospy.get_param("~ranges", {}))
+    node = ConsoleNode(model, plain=not interactive)
+    stop = threading.Event()
+
+    def run_script():
+        for item in filter(None, (c.strip() for c in args.commands.split(";"))):
+            if item.startswith("wait"):
+                end = rospy.get_time() + float(item.split()[1])
+                while rospy.get_time() < end and not stop.is_set():
+                    time.sleep(0.05)
+            else:
+                node.command(item)
+    threading.Thread(target=run_script, daemon=True).start()
+    reader = threading.Thread(target=_read_keys if interactive else _read_lines,
+                              args=(node.command, stop), daemon=True)
+    if interactive or not os.environ.get("CONSOLE_NO_STDIN"):
+        reader.start()
+    try:
+        if interactive:
+            from rich.live import Live
+            with Live(render_rich(model, node.refresh()), refresh_per_second=4, screen=False) as live:
+                while model.screen != Screen.CLOSED and not rospy.is_shutdown():
+                    time.sleep(args.period)
+                    with node.lock:
+                        live.update(render_rich(model, node.refresh()))
+        else:
+            last = None
+            while model.screen != Screen.CLOSED and not rospy.is_shutdown():
+                lines = render_plain(model, node.refresh())
+                if lines[1:] != last:  # print on change only, so logs stay readable
+                    print("\n".join(lines), flush=True)
+                    last = lines[1:]
+                time.sleep(args.period)
+    except KeyboardInterrupt:
+        pass
+    stop.set()
+    rospy.signal_shutdown("console closed")
+    return 0

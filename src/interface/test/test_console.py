@@ -1,0 +1,71 @@
+"""Operator console model and plain rendering (ROS-free)."""
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
+from interface.console import render_plain  # noqa: E402
+from interface.console_model import ConsoleModel, Screen  # noqa: E402
+
+
+def started(**kwargs):
+    model = ConsoleModel(**kwargs)
+    assert model.handle("s") == (None, "Flight Management opened: the drone takes off by itself after 30 s "
+                                       "without a choice")
+    return model
+
+
+def test_start_menu_then_flight_management():
+    model = ConsoleModel()
+    assert model.screen == Screen.START and model.title() == "Start"
+    command, reply = model.handle("landing")
+    assert command is None and "press s (Start) first" in reply
+    model.handle("start")
+    assert model.screen == Screen.FLIGHT_MANAGEMENT
+    assert model.handle("l") == ("landing", "sent: landing")
+    assert model.handle("manual")[0] == "manual"
+    assert model.handle("e")[0] == "emergency"
+    assert model.handle("q")[0] == "quit" and model.screen == Screen.CLOSED
+
+
+def test_unknown_command_says_what_is_available():
+    command, reply = started().handle("fly away")
+    assert command is None and "unknown command 'fly away'" in reply and "l=landing" in reply
+
+
+def test_panel_highlights_out_of_range_and_unreadable_values_and_missing_sensors():
+    model = started(ranges={"drone_battery": (40.0, 100.0), "wind_speed": (0.0, 12.0)})
+    model.set_value("wind_speed", 4.0)
+    model.set_value("drone_battery", 10.0)
+    model.set_value("temp", "abc")
+    model.set_sensor("camera", True)
+    model.set_sensor("imu", False)
+    rows = {row.key: row for row in model.rows()}
+    assert not rows["wind_speed"].alarm and rows["wind_speed"].text == "4.0 m/s"
+    assert rows["drone_battery"].alarm
+    assert rows["temp"].alarm and "unreadable" in rows["temp"].text
+    assert rows["sensors"].alarm and rows["sensors"].text == "missing: imu"
+    assert rows["control_battery"].text == "unreadable"
+
+
+def test_supervisor_decisions_show_flag_and_reason():
+    model = started()
+    model.set_value("wind_speed", 13.0)
+    model.on_decision({"t": 12.5, "condition": "wind_speed", "flag": 1, "action": "emergency_landing",
+                       "reason": "wind 13.0 m/s above the 12 m/s limit"})
+    row = {row.key: row for row in model.rows()}["wind_speed"]
+    assert row.alarm and row.note == "flag #1, emergency_landing: wind 13.0 m/s above the 12 m/s limit"
+    assert "t=12.5 wind_speed [flag #1]: emergency_landing" in model.log[-1]
+
+
+def test_warning_and_emergency_position_are_rendered_with_countdown():
+    model = started()
+    model.mode = "emergency"
+    model.on_warning({"id": 3, "message": "wind gusts", "options": ["manual", "emergency", "continue"],
+                      "deadline": 40.0})
+    model.emergency_position = (12.34, -5.5)
+    text = "\n".join(render_plain(model, 30.0))
+    assert "WARNING: wind gusts -> answer manual/emergency/continue within 10 s" in text
+    assert "x=12.34 m, y=-5.50 m" in text
+    assert "Emergency Mode" in text and "a Acknowledge" in text
+    model.on_warning({})
+    assert model.warning is None
