@@ -218,7 +218,7 @@ def test_vehicle_follows_commands_within_its_acceleration_limit():
 
 def red_mask(image):
     r, g, b = (image[..., i].astype(int) for i in range(3))
-    return (r > 150) & (g < 80) & (b < 80)
+    return (r > 100) & (r > 2.5 * g) & (r > 2.5 * b)
 
 
 def test_camera_shows_the_pad_where_it_should_be():
@@ -259,3 +259,20 @@ def test_same_seed_same_noise():
     a, b = make_sim(seed=5), make_sim(seed=5)
     assert [a.sonar() for _ in range(5)] == [b.sonar() for _ in range(5)]
     assert make_sim(seed=6).gps()[0][0] != make_sim(seed=5).gps()[0][0]
+
+
+def test_faults_black_out_the_camera_and_show_a_false_target():
+    sim = make_sim()
+    airborne(sim)
+    run(sim, 3.0, command=(0.0, 0.0, 1.0, 0.0))
+    assert not sim.inject_fault("meteor", 1.0)
+    assert sim.inject_fault("camera_blackout", 1.0) and sim.camera_blacked_out()
+    run(sim, 1.1)
+    assert not sim.camera_blacked_out()
+    before = red_mask(sim.render_camera()).sum()
+    assert sim.inject_fault("detection_false_target", 5.0)
+    run(sim, 0.1)
+    during = red_mask(sim.render_camera()).sum()
+    assert during > before * 1.3  # a 1.0 x 0.6 m red object beside the 1 m pad
+    run(sim, 5.0)
+    assert red_mask(sim.render_camera()).sum() == pytest.approx(before, rel=0.1)

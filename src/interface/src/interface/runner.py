@@ -5,6 +5,7 @@ distance from the pad); nothing here feeds ground truth back into the flying sys
 import argparse
 import json
 import os
+import subprocess
 import sys
 import time
 
@@ -53,7 +54,7 @@ class FlightMonitor:
         import rospy
         from landing_msgs.msg import PositionXYCommand, Touchdown
         from geometry_msgs.msg import PoseStamped
-        from std_msgs.msg import Empty, String
+        from std_msgs.msg import String
         self.rospy, self.s = rospy, s
         rospy.init_node("scenario_runner", disable_signals=True)
         self.touchdown, self.touchdown_wall = None, None
@@ -69,7 +70,7 @@ class FlightMonitor:
         rospy.Subscriber("supervisor/decisions", String, self._on_decision)
         self.operator = rospy.Publisher("operator/command", String, queue_size=10, latch=True)
         self.tracker_command = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
-        self.takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
+        self.fault = rospy.Publisher("mujoco_sim/fault", String, queue_size=10)
         self.wall_deadline = time.monotonic() + wall_timeout
 
     def _on_touchdown(self, msg):
@@ -123,6 +124,12 @@ class FlightMonitor:
                 self.emergency_ordered = True
         elif "set_param" in event:
             rospy.set_param("/" + event["set_param"], event["value"])
+        elif event["fault"] == "kill_node":
+            name = event["name"] if event["name"].startswith("/") else "/" + event["name"]
+            result = subprocess.run(["rosnode", "kill", name], capture_output=True, text=True, timeout=30)
+            rospy.loginfo("killed %s: %s", name, (result.stdout + result.stderr).strip())
+        else:
+            self.fault.publish(String(data=json.dumps({"fault": event["fault"], "duration_s": event["duration_s"]})))
 
     def run(self, schedule, time_limit):
         rospy = self.rospy

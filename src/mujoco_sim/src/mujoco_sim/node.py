@@ -149,12 +149,27 @@ class SimNode:
         rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
         rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
         rospy.Subscriber("mujoco_sim/start", Empty, lambda _: self.started.set(), queue_size=1)
+        rospy.Subscriber("mujoco_sim/fault", String, self._on_fault, queue_size=10)
 
     def _on_cmd_vel(self, msg):
         problem = self.sim.set_velocity_command(msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.z)
         if problem:
             rospy.logwarn_throttle(2.0, "ignored /ardrone/cmd_vel with %s: the drone holds its position; "
                                         "send finite velocities in m/s and rad/s" % problem)
+
+    def _on_fault(self, msg):
+        """JSON {"fault": "camera_blackout" | "detection_false_target", "duration_s": seconds}."""
+        try:
+            request = json.loads(msg.data)
+            fault, duration = request["fault"], float(request.get("duration_s", 2.0))
+            if not math.isfinite(duration) or duration < 0:
+                raise ValueError("duration_s must be a non-negative number")
+        except (ValueError, KeyError, TypeError) as err:
+            rospy.logwarn("ignored mujoco_sim/fault %r: %s; expected JSON like "
+                          '{"fault": "camera_blackout", "duration_s": 2.0}', msg.data, err)
+            return
+        self.actions.put(lambda: self.sim.inject_fault(fault, duration) or rospy.logwarn(
+            "ignored unknown fault %r; known: %s", fault, ", ".join(self.sim.FAULTS)))
 
     def _on_vehicle_cmd(self, msg):
         problem = self.sim.set_vehicle_command(msg.linear.x, msg.angular.z)
@@ -216,7 +231,7 @@ class SimNode:
             rospy.rostime._set_rostime(stamp)  # this node is the clock: it does not listen to /clock
         if due["conditions"]:
             self._sync_conditions()
-        if due["camera"] and self.cfg["camera"]["enabled"] and \
+        if due["camera"] and self.cfg["camera"]["enabled"] and not self.sim.camera_blacked_out() and \
                 (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()):
             self._publish_camera(stamp)
         if due["imu"] and self.pub_imu.get_num_connections():

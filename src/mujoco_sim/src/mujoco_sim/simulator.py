@@ -91,6 +91,10 @@ class Simulator:
         self.accel_adr = m.sensor_adr[name2id(obj.mjOBJ_SENSOR, "ardrone_accel")]
         self.gyro_adr = m.sensor_adr[name2id(obj.mjOBJ_SENSOR, "ardrone_gyro")]
         self.pad_size = 2.0 * float(m.geom_size[self.pad_geom][0])
+        false_target = name2id(obj.mjOBJ_BODY, "false_target")
+        self.false_target_mocap = int(m.body_mocapid[false_target]) if false_target >= 0 else -1
+        self.false_target_until = -1.0
+        self.camera_blackout_until = -1.0
 
         streams = np.random.SeedSequence(seed).spawn(8)
         self.rng = {name: np.random.default_rng(s) for name, s in zip(
@@ -241,6 +245,8 @@ class Simulator:
                                         power_available=not self.battery.empty)
         d.ctrl[self.rotor_ctrl] = thrusts
         self._drive_vehicle(dt, now)
+        if self.false_target_mocap >= 0:
+            self._place_false_target(now)
         self._mj.mj_step(m, d)
         thrust_fraction = float(thrusts.sum()) / self.max_total_thrust
         self.battery.step(dt, thrust_fraction, self.temperature, motors_on=airborne)
@@ -307,6 +313,33 @@ class Simulator:
         self.touchdowns.append(self.touchdown)
         self.autopilot.touched_down(crashed)
         LOG.info(self.touchdown.describe())
+
+    # ----- faults (robustness scenarios) --------------------------------------------------------
+    FAULTS = ("camera_blackout", "detection_false_target")
+
+    def inject_fault(self, fault, duration_s):
+        """Start a fault for ``duration_s`` sim seconds; returns False for an unknown fault."""
+        until = self.time + duration_s
+        if fault == "camera_blackout":
+            self.camera_blackout_until = until
+        elif fault == "detection_false_target" and self.false_target_mocap >= 0:
+            self.false_target_until = until
+        else:
+            return False
+        LOG.info("fault %s for %.1f s", fault, duration_s)
+        return True
+
+    def camera_blacked_out(self):
+        return self.time < self.camera_blackout_until
+
+    def _place_false_target(self, now):
+        """Beside the vehicle (1.6 m to its left, on the ground) while the fault lasts."""
+        if now < self.false_target_until:
+            x, y, yaw = self.data.qpos[self.vehicle_qpos:self.vehicle_qpos + 3]
+            self.data.mocap_pos[self.false_target_mocap] = (x - 1.6 * math.sin(yaw), y + 1.6 * math.cos(yaw), 0.003)
+            self.data.mocap_quat[self.false_target_mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        elif self.data.mocap_pos[self.false_target_mocap][2] > -1.0:
+            self.data.mocap_pos[self.false_target_mocap] = (0.0, 0.0, -50.0)
 
     # ----- ground truth (scoring and tf only) ----------------------------------------------------
     def drone_pose(self):
