@@ -17,7 +17,7 @@ APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip pytho
   libtf2-geometry-msgs-dev python3-tf2-geometry-msgs libopencv-dev python3-opencv libeigen3-dev \
   libgtest-dev googletest libosmesa6 libgl1 libglfw3
 
-.PHONY: all deps build test unit-test ros-test demo bench clean
+.PHONY: all deps build test demo bench clean
 
 all: build
 
@@ -56,6 +56,8 @@ demo: build
 
 bench: build
 	source env.sh && rosrun mujoco_sim bench_sim
+	source env.sh && rosrun interface benchmark scenarios --out results/bench --jobs 2 --readme README.md || true
+	@echo "== results table written to README.md (Results section) and results/bench/summary.md"
 
 clean:
 	rm -rf build devel install $(STAMPS)

@@ -49,3 +49,11 @@ def test_percentile():
     assert benchmark.percentile([1, 2, 3, 4, 5], 0.5) == 3
     assert benchmark.percentile([0.0, 1.0], 0.95) == 0.95
     assert benchmark.percentile([], 0.5) is None
+
+
+def test_readme_block_is_replaced(tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text("intro\n<!-- bench:start -->\nold\n<!-- bench:end -->\nafter\n")
+    benchmark.update_readme(str(readme), "| table |", 600.0, 3)
+    text = readme.read_text()
+    assert "old" not in text and "| table |" in text and "3 scenarios" in text and text.endswith("after\n")

@@ -153,12 +153,31 @@ def write_outputs(rows, out_dir, elapsed):
     return summary
 
 
+README_START, README_END = "<!-- bench:start -->", "<!-- bench:end -->"
+
+
+def update_readme(readme, summary, elapsed, count):
+    """Replace the block between the bench markers of ``readme`` with this run's table."""
+    import platform
+    with open(readme) as stream:
+        text = stream.read()
+    if README_START not in text or README_END not in text:
+        raise ValueError("%s has no %s ... %s block to replace" % (readme, README_START, README_END))
+    block = "%s\n%d scenarios of `scenarios/` on %s (%s, %d cores), %.0f min wall with `--jobs 2`:\n\n%s\n%s" % (
+        README_START, count, time.strftime("%Y-%m-%d"), platform.machine(), os.cpu_count(), elapsed / 60.0,
+        summary, README_END)
+    head, rest = text.split(README_START, 1)
+    with open(readme, "w") as stream:
+        stream.write(head + block + rest.split(README_END, 1)[1])
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description="Run many landing scenarios in parallel and summarise them.")
     parser.add_argument("scenarios", nargs="+", help="scenario files or directories of them")
     parser.add_argument("--out", required=True, help="output directory")
     parser.add_argument("--jobs", type=int, default=2, help="scenarios run at once (each has its own master)")
     parser.add_argument("--wall-timeout", type=float, default=None, help="wall-clock limit per scenario [s]")
+    parser.add_argument("--readme", default=None, help="README whose bench block gets this run's table")
     args = parser.parse_args(argv)
     files = collect(args.scenarios)
     if not files:
@@ -177,7 +196,10 @@ def main(argv=None):
                 rows.append(row)
                 progress.update(task, advance=1, description="%s: %s" % (row["name"], row.get("outcome")))
     rows.sort(key=lambda r: r["name"])
-    summary = write_outputs(rows, args.out, time.monotonic() - start)
+    elapsed = time.monotonic() - start
+    summary = write_outputs(rows, args.out, elapsed)
+    if args.readme:
+        update_readme(args.readme, summary, elapsed, len(rows))
     print(summary)
     print("results: %s, %s" % (os.path.join(args.out, "results.csv"), os.path.join(args.out, "summary.md")))
     return 0 if all(r["passed"] for r in rows) else 1
