@@ -36,6 +36,8 @@ $(STAMPS)/venv: requirements.txt $(STAMPS)/apt
 	@echo "== Python venv (system site-packages for ROS) with pinned packages"
 	/usr/bin/python3 -m venv --system-site-packages $(VENV)
 	$(VENV)/bin/pip install -q --disable-pip-version-check -r requirements.txt
+	@# so `.venv/bin/python -m interface.analyze BAG` works in a shell where nothing is sourced
+	echo "$(WS)/src/interface/src" > "$$($(VENV)/bin/python -c 'import site; print(site.getsitepackages()[0])')/landing_interface.pth"
 	@touch $@
 
 deps: $(STAMPS)/venv

@@ -93,9 +93,16 @@ class FlightMonitor:
         master = rosgraph.Master("/scenario_runner")
         deadline = time.monotonic() + timeout
 
+        # rosbag record -e subscribes to matching topics as it discovers them (about once a second):
+        # wait until it has every topic the analysis cannot do without.
+        needed = ["/ardrone/navdata", "/ardrone/touchdown", "/groundtruth/ardrone", "/groundtruth/landing_pad",
+                  "/summit_xl/gps/odom", "/tf"]
+        if self.s.get("_needs_tracker"):
+            needed += ["/platform_tracking/state"]
+
         def ready():
             subscribers = {topic: nodes for topic, nodes in master.getSystemState()[1]}
-            recorder_ready = not recorded or "/flight_recorder" in subscribers.get("/ardrone/navdata", [])
+            recorder_ready = not recorded or all("/flight_recorder" in subscribers.get(t, []) for t in needed)
             return recorder_ready and (not self.s.get("_needs_tracker") or self.tracker_state is not None)
         while not ready():
             if time.monotonic() > deadline:
