@@ -450,6 +450,7 @@ class Simulator:
             self._renderer = self._mj.Renderer(self.model, self.cfg["camera"]["height"], self.cfg["camera"]["width"])
             self._camera_view = self._mj.MjvOption()
             self._camera_view.geomgroup[DRONE_GEOM_GROUP] = 0
+            self._camera_view.sitegroup[:] = 0  # site markers are not part of the world a camera sees
         self._renderer.update_scene(self.data, camera=self.camera, scene_option=self._camera_view)
         image = self._renderer.render()
         std = self.cfg["camera"]["noise"] if noise_std is None else noise_std

@@ -1,0 +1,109 @@
+// Red landing-pad detector for the bottom camera (ROS-free).
+//
+// Pipeline (thesis ch. 3.3.2, made robust): HSV colour masks (red wraps hue 0/180, so two ranges;
+// the green heading strip is added to the pad mask so it does not cut the outline), morphological
+// opening, outer contours, then per contour:
+//  - whole pad (not touching the image border): polygon approximation to 4 corners, corners refined
+//    by fitting lines to the contour's edges, centre = intersection of the diagonals (the projection
+//    of the square's centre, exact under perspective); shape checks (convexity, solidity, side ratio,
+//    corner angles) and, when the view geometry is known, the metric size and right angles;
+//  - pad cut by the image border: the visible edges (and the strip's) are back-projected onto the pad
+//    plane and a 1 m square with its strip is fitted to them, which needs the view geometry.
+// The green strip's centre gives the pad's forward direction.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "uav_vision/camera_geometry.h"
+
+namespace uav_vision {
+
+enum class ColorOrder { kRgb, kBgr };
+
+// The physical target [m] (docs/conventions.md).
+struct PadModel {
+  double side = 1.0;           // side of the red square
+  double strip_length = 0.7;   // green strip, across the pad (along the pad's left axis)
+  double strip_width = 0.12;   // green strip, along the pad's forward axis
+  double strip_offset = 0.36;  // strip centre ahead of the pad centre
+};
+
+struct PadDetectorParams {
+  PadModel pad;
+  // OpenCV HSV: hue 0..180, saturation and value 0..255. Red is hue <= red_hue_low_max or >= red_hue_high_min.
+  int red_hue_low_max = 10;
+  int red_hue_high_min = 170;
+  int red_saturation_min = 100;
+  int red_value_min = 70;     // the pad's shaded side faces are darker and are not its top
+  int green_hue_min = 40;
+  int green_hue_max = 85;
+  int green_saturation_min = 100;
+  int green_value_min = 60;
+  int morphology_kernel_px = 3;          // opening removes specks smaller than this [px]; 1 = off
+  double min_area_px = 60.0;             // smaller blobs are not considered [px^2]
+  double min_solidity = 0.9;             // contour area / convex hull area
+  double approx_epsilon = 0.04;          // approxPolyDP tolerance, fraction of the perimeter
+  double max_side_ratio = 1.8;           // longest / shortest side in the image (perspective)
+  double max_corner_angle_error_deg = 25.0;  // image corners' deviation from 90 deg
+  double size_tolerance = 0.3;           // relative error of the measured side allowed vs pad.side
+  double max_edge_angle_error_deg = 10.0;    // pad edges' deviation from right angles on the plane
+  double border_margin_px = 1.5;         // outline this close to the image edge is the frame, not the pad
+  double min_edge_length_px = 10.0;      // shorter straight pieces of outline are ignored
+  double fit_tolerance_m = 0.06;         // partial pads: outline may stray this far from the fitted square
+  double min_partial_support_px = 30.0;  // partial pads: visible edge needed to place the centre along each axis [px]
+  double min_strip_area_px = 10.0;       // smaller green blobs are not the strip [px^2]
+};
+
+struct Detection {
+  bool found = false;
+  std::string reason;               // why nothing was found (the best candidate's rejection)
+  cv::Point2d centre_px;            // projection of the pad centre, subpixel; outside the image possibly when partial
+  double side_px = 0.0;             // mean side length in the image [px]
+  std::array<cv::Point2d, 4> corners_px{};  // pad corners, in order around the square (fitted ones when partial)
+  bool partial = false;             // pad cut by the image border; centre completed from edges, corners, strip
+  bool strip_found = false;         // green heading strip seen inside the pad
+  cv::Point2d strip_centre_px;      // its centre (moments centroid; the fitted centre when the strip is cut)
+  double expected_side_px = 0.0;    // pad side expected from the camera height, 0 when unknown [px]
+  double quality = 0.0;             // 0..1: shape, size and fit agreement
+  double optical_axis_margin_px = 0.0;  // signed distance of the principal point to the pad outline (+ inside)
+  std::vector<cv::Point> outline;   // pad outline in the image
+};
+
+// Not thread-safe: keeps its work images between calls (one detector per thread).
+class PadDetector {
+ public:
+  explicit PadDetector(const PadDetectorParams& params = PadDetectorParams());
+
+  // Empty when the parameters make sense, else the first problem, naming the parameter.
+  static std::string validate(const PadDetectorParams& params);
+
+  // image: 8-bit, 3 channels, in `order`. view: camera intrinsics, attitude and height above the pad
+  // plane; without it, the size cannot be checked against the height and a pad cut by the image
+  // border is rejected (its centre cannot be completed without metric scale).
+  Detection detect(const cv::Mat& image, ColorOrder order, const PlaneView* view = nullptr) const;
+
+  const PadDetectorParams& params() const { return params_; }
+  // The last frame's masks (for debugging and tests).
+  const cv::Mat& padMask() const { return pad_mask_; }
+  const cv::Mat& stripMask() const { return strip_mask_; }
+
+ private:
+  struct Candidate;
+  void computeMasks(const cv::Mat& image, ColorOrder order) const;
+  Candidate evaluate(const std::vector<cv::Point>& outline, const cv::Size& size, const PlaneView* view) const;
+  bool evaluateWhole(const std::vector<cv::Point>& outline, const PlaneView* view, Candidate& candidate) const;
+  bool evaluatePartial(const std::vector<cv::Point>& outline, const cv::Size& size, const PlaneView& view,
+                       Candidate& candidate) const;
+  const std::vector<cv::Point>* findStrip(const std::vector<cv::Point>& outline) const;
+
+  PadDetectorParams params_;
+  cv::Mat kernel_;
+  mutable cv::Mat hsv_, planes_[3], not_red_hue_, red_colour_, bright_, pad_mask_, strip_mask_;
+  mutable std::vector<std::vector<cv::Point>> strip_outlines_;
+};
+
+}  // namespace uav_vision

@@ -1,0 +1,81 @@
+// ROS wrapper of the pad localizer: the platform_detection node (thin: sensor plumbing, checks of the
+// incoming messages, publishing). The algorithm lives in the ROS-free uav_vision_detector library.
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <Eigen/Geometry>
+#include <image_transport/image_transport.h>
+#include <landing_msgs/Altimeter.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/Range.h>
+
+#include "uav_vision/pad_localizer.h"
+
+namespace uav_vision {
+
+// A missing or invalid parameter; the message names it.
+struct ConfigError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct PlatformDetectionConfig {
+  PadLocalizerParams localizer;
+  std::string base_frame, world_frame;
+  double odom_timeout = 0.5;       // [s]
+  double imu_max_offset = 0.05;    // [s]
+  double sonar_timeout = 0.2;      // [s]
+  double altimeter_timeout = 0.5;  // [s]
+  double warn_period = 5.0;        // [s]
+
+  // Reads every key of config/platform_detection.yaml from `pnh`; throws ConfigError naming the first
+  // missing or invalid one.
+  static PlatformDetectionConfig load(const ros::NodeHandle& pnh);
+};
+
+class PlatformDetectionRos {
+ public:
+  // Subscribes and advertises on `nh` (relative names); parameters from `pnh`. Throws ConfigError.
+  PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle pnh);
+
+ private:
+  void onImage(const sensor_msgs::ImageConstPtr& msg);
+  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& msg);
+  void onImu(const sensor_msgs::ImuConstPtr& msg);
+  void onSonar(const sensor_msgs::RangeConstPtr& msg);
+  void onAltimeter(const landing_msgs::AltimeterConstPtr& msg);
+  void onOdomEstimate(const nav_msgs::OdometryConstPtr& msg);
+
+  // IMU attitude nearest to `stamp`, if one is within imu_max_offset.
+  std::optional<Eigen::Quaterniond> attitudeAt(const ros::Time& stamp) const;
+  // A reading stamped within `timeout` of `stamp`, else NaN.
+  static double freshValue(const std::optional<std::pair<ros::Time, double>>& reading, const ros::Time& stamp,
+                           double timeout);
+  void publish(const std_msgs::Header& image_header, const PadObservation& observation);
+  void publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image, const PadObservation& observation,
+                         const CameraIntrinsics& intrinsics);
+
+  PlatformDetectionConfig config_;
+  PadLocalizer localizer_;
+  image_transport::ImageTransport image_transport_;
+  image_transport::Subscriber image_sub_;
+  image_transport::Publisher debug_pub_;
+  ros::Subscriber camera_info_sub_, imu_sub_, sonar_sub_, altimeter_sub_, odom_sub_;
+  ros::Publisher platform_in_base_pub_, platform_in_world_pub_, indicator_in_base_pub_;
+
+  std::optional<CameraIntrinsics> intrinsics_;
+  std::deque<std::pair<ros::Time, Eigen::Quaterniond>> attitudes_;  // last second of IMU orientations
+  std::optional<std::pair<ros::Time, double>> sonar_, altitude_;
+  nav_msgs::OdometryConstPtr odom_estimate_;
+};
+
+}  // namespace uav_vision

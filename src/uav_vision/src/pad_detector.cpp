@@ -1,0 +1,633 @@
+#include "uav_vision/pad_detector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <optional>
+
+#include <opencv2/imgproc.hpp>
+
+namespace uav_vision {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+std::string format(const char* fmt, ...) {
+  char buffer[256];
+  va_list args;
+  va_start(args, fmt);
+  std::vsnprintf(buffer, sizeof(buffer), fmt, args);
+  va_end(args);
+  return buffer;
+}
+
+bool onBorder(const cv::Point& p, const cv::Size& size, double margin) {
+  return p.x <= margin || p.y <= margin || p.x >= size.width - 1 - margin || p.y >= size.height - 1 - margin;
+}
+
+// Intersection of two lines given as (vx, vy, x0, y0), as cv::fitLine returns them.
+std::optional<cv::Point2d> intersect(const cv::Vec4f& a, const cv::Vec4f& b) {
+  const cv::Point2d da(a[0], a[1]), db(b[0], b[1]), pa(a[2], a[3]), pb(b[2], b[3]);
+  const double cross = da.x * db.y - da.y * db.x;
+  if (std::abs(cross) < 1e-6) return std::nullopt;
+  const cv::Point2d w = pb - pa;
+  const double t = (w.x * db.y - w.y * db.x) / cross;
+  return pa + t * da;
+}
+
+cv::Vec4f lineThrough(const cv::Point2d& a, const cv::Point2d& b) {
+  const cv::Point2d d = b - a;
+  const double n = std::max(std::hypot(d.x, d.y), 1e-9);
+  return cv::Vec4f(float(d.x / n), float(d.y / n), float(a.x), float(a.y));
+}
+
+double angleBetween(const cv::Point2d& a, const cv::Point2d& b) {
+  return std::acos(std::clamp(a.dot(b) / std::max(std::hypot(a.x, a.y) * std::hypot(b.x, b.y), 1e-12), -1.0, 1.0));
+}
+
+double clamp01(double x) { return std::clamp(x, 0.0, 1.0); }
+
+// A straight piece of outline, on the pad plane.
+struct PlaneSegment {
+  Eigen::Vector2d centre;     // centroid of its points [m]
+  Eigen::Vector2d direction;  // unit
+  double length_px;           // in the image: how well it is measured [px]
+};
+
+// Straight pieces of a closed outline that are away from the image border: the outline is cut into
+// runs between border points, each run into straight pieces by approxPolyDP, and a line is fitted on
+// the plane to each piece's middle (its ends round off at corners).
+std::vector<PlaneSegment> planeSegments(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& plane,
+                                        const cv::Size& size, const PadDetectorParams& params) {
+  std::vector<PlaneSegment> segments;
+  const int n = static_cast<int>(outline.size());
+  int first_border = -1;
+  for (int i = 0; i < n && first_border < 0; ++i)
+    if (onBorder(outline[i], size, params.border_margin_px)) first_border = i;
+  std::vector<std::vector<int>> runs(1);
+  for (int k = 1; k <= n; ++k) {
+    const int i = (std::max(first_border, 0) + k) % n;
+    if (first_border >= 0 && onBorder(outline[i], size, params.border_margin_px)) {
+      if (!runs.back().empty()) runs.emplace_back();
+    } else {
+      runs.back().push_back(i);
+    }
+  }
+  std::vector<cv::Point> run_points, vertices;
+  std::vector<cv::Point2f> piece;
+  for (const auto& run : runs) {
+    if (run.size() < params.min_edge_length_px) continue;
+    run_points.clear();
+    for (int i : run) run_points.push_back(outline[i]);
+    cv::approxPolyDP(run_points, vertices, 2.0, false);
+    // approxPolyDP keeps a subset of the run's points in order: find their indices.
+    std::vector<size_t> vertex_index;
+    size_t at = 0;
+    for (const auto& v : vertices) {
+      while (at < run_points.size() && run_points[at] != v) ++at;
+      if (at == run_points.size()) break;
+      vertex_index.push_back(at);
+    }
+    for (size_t k = 0; k + 1 < vertex_index.size(); ++k) {
+      const size_t a = vertex_index[k], b = vertex_index[k + 1];
+      if (b - a < params.min_edge_length_px) continue;
+      const size_t trim = std::max<size_t>(2, (b - a) / 8);
+      piece.clear();
+      for (size_t j = a + trim; j + trim <= b; ++j) piece.push_back(plane[run[j]]);
+      if (piece.size() < 4) continue;
+      cv::Vec4f line;
+      cv::fitLine(piece, line, cv::DIST_L2, 0, 0.01, 0.01);
+      segments.push_back({Eigen::Vector2d(line[2], line[3]), Eigen::Vector2d(line[0], line[1]).normalized(),
+                          cv::norm(run_points[b] - run_points[a])});
+    }
+  }
+  return segments;
+}
+
+// An edge of the pad or of the strip on the plane, expressed in the square's axes (u, v): the line
+// `normal . p = offset`, with the region it bounds on the `interior` side (+1: larger offsets).
+struct EdgeLine {
+  int normal_axis;  // 0: normal along u, 1: along v
+  double offset;    // [m]
+  int interior;     // +1 or -1
+  double weight;    // visible length in the image [px]
+};
+
+// Merges lines of the same axis closer than `merge` metres; nothing if two lines at the same place
+// bound regions on opposite sides (not a convex shape).
+std::optional<std::vector<EdgeLine>> clusterLines(std::vector<EdgeLine> lines, double merge) {
+  std::sort(lines.begin(), lines.end(), [](const EdgeLine& a, const EdgeLine& b) {
+    return a.normal_axis != b.normal_axis ? a.normal_axis < b.normal_axis : a.offset < b.offset;
+  });
+  std::vector<EdgeLine> merged;
+  for (const auto& line : lines) {
+    if (!merged.empty() && merged.back().normal_axis == line.normal_axis &&
+        std::abs(merged.back().offset - line.offset) < merge) {
+      EdgeLine& m = merged.back();
+      if (m.interior != line.interior) return std::nullopt;
+      m.offset = (m.offset * m.weight + line.offset * line.weight) / (m.weight + line.weight);
+      m.weight += line.weight;
+    } else {
+      merged.push_back(line);
+    }
+  }
+  return merged;
+}
+
+}  // namespace
+
+struct PadDetector::Candidate {
+  Detection detection;
+  bool ok = false;
+};
+
+PadDetector::PadDetector(const PadDetectorParams& params) : params_(params) {
+  const int k = std::max(1, params.morphology_kernel_px);
+  kernel_ = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k));
+}
+
+std::string PadDetector::validate(const PadDetectorParams& p) {
+  auto in = [](double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; };
+  if (!(p.pad.side > 0.0)) return "pad side must be positive";
+  if (!(p.pad.strip_length > 0.0 && p.pad.strip_width > 0.0 && p.pad.strip_length < p.pad.side))
+    return "strip length and width must be positive and the strip inside the pad";
+  if (!(std::abs(p.pad.strip_offset) + p.pad.strip_width / 2 < p.pad.side / 2)) return "strip_offset puts the strip off the pad";
+  if (!in(p.red_hue_low_max, 0, 179) || !in(p.red_hue_high_min, 0, 180)) return "red hue limits must be in [0, 180]";
+  if (!in(p.green_hue_min, 0, 180) || !in(p.green_hue_max, p.green_hue_min, 180))
+    return "green hue range must satisfy 0 <= green_hue_min <= green_hue_max <= 180";
+  for (int v : {p.red_saturation_min, p.red_value_min, p.green_saturation_min, p.green_value_min})
+    if (!in(v, 0, 255)) return "saturation and value minima must be in [0, 255]";
+  if (!in(p.morphology_kernel_px, 1, 15)) return "morphology_kernel_px must be in [1, 15]";
+  if (!in(p.min_area_px, 1, 1e6)) return "min_area_px must be in [1, 1e6]";
+  if (!in(p.min_solidity, 0, 1)) return "min_solidity must be in [0, 1]";
+  if (!in(p.approx_epsilon, 0.001, 0.2)) return "approx_epsilon must be in [0.001, 0.2]";
+  if (!in(p.max_side_ratio, 1, 10)) return "max_side_ratio must be in [1, 10]";
+  if (!in(p.max_corner_angle_error_deg, 0, 89)) return "max_corner_angle_error_deg must be in [0, 89]";
+  if (!in(p.size_tolerance, 0, 0.9)) return "size_tolerance must be in [0, 0.9]";
+  if (!in(p.max_edge_angle_error_deg, 0, 44)) return "max_edge_angle_error_deg must be in [0, 44]";
+  if (!in(p.border_margin_px, 0, 20)) return "border_margin_px must be in [0, 20]";
+  if (!in(p.min_edge_length_px, 3, 1000)) return "min_edge_length_px must be in [3, 1000]";
+  if (!in(p.fit_tolerance_m, 0.001, 0.5 * p.pad.side)) return "fit_tolerance_m must be in [0.001, pad side / 2]";
+  if (!in(p.min_strip_area_px, 1, 1e6)) return "min_strip_area_px must be in [1, 1e6]";
+  if (!in(p.min_partial_support_px, 0.0, 1000.0)) return "min_partial_support_px must be in [0, 1000]";
+  return "";
+}
+
+void PadDetector::computeMasks(const cv::Mat& image, ColorOrder order) const {
+  const auto& p = params_;
+  cv::cvtColor(image, hsv_, order == ColorOrder::kRgb ? cv::COLOR_RGB2HSV : cv::COLOR_BGR2HSV);
+  // Thresholds on the separate planes: 3-channel cv::inRange costs three times as much.
+  cv::split(hsv_, planes_);
+  const cv::Mat &hue = planes_[0], &saturation = planes_[1], &value = planes_[2];
+  // Red: hue outside (red_hue_low_max, red_hue_high_min), i.e. around 0/180.
+  cv::inRange(hue, p.red_hue_low_max + 1, p.red_hue_high_min - 1, not_red_hue_);
+  cv::threshold(saturation, red_colour_, p.red_saturation_min - 1, 255, cv::THRESH_BINARY);
+  cv::threshold(value, bright_, p.red_value_min - 1, 255, cv::THRESH_BINARY);
+  cv::bitwise_and(red_colour_, bright_, red_colour_);
+  cv::subtract(red_colour_, not_red_hue_, red_colour_);  // saturating: clears the non-red hues
+  cv::inRange(hue, p.green_hue_min, p.green_hue_max, strip_mask_);
+  cv::threshold(saturation, bright_, p.green_saturation_min - 1, 255, cv::THRESH_BINARY);
+  cv::bitwise_and(strip_mask_, bright_, strip_mask_);
+  cv::threshold(value, bright_, p.green_value_min - 1, 255, cv::THRESH_BINARY);
+  cv::bitwise_and(strip_mask_, bright_, strip_mask_);
+  // The strip lies inside the pad: counting it as pad keeps the outline a square when the strip is cut
+  // by the image border.
+  cv::bitwise_or(red_colour_, strip_mask_, pad_mask_);
+  if (p.morphology_kernel_px > 1) {
+    cv::morphologyEx(pad_mask_, pad_mask_, cv::MORPH_OPEN, kernel_);
+    cv::morphologyEx(strip_mask_, strip_mask_, cv::MORPH_OPEN, kernel_);
+  }
+}
+
+Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const PlaneView* view) const {
+  Detection result;
+  if (image.empty()) {
+    result.reason = "empty image";
+    return result;
+  }
+  if (image.depth() != CV_8U || image.channels() != 3) {
+    result.reason = format("expected an 8-bit 3-channel image, got depth %d with %d channels", image.depth(),
+                           image.channels());
+    return result;
+  }
+  if (image.cols < 8 || image.rows < 8) {
+    result.reason = format("image too small (%dx%d)", image.cols, image.rows);
+    return result;
+  }
+  if (view) {
+    if (!view->problem().empty()) {
+      result.reason = "bad view geometry: " + view->problem();
+      return result;
+    }
+    const auto& k = view->intrinsics();
+    if (image.cols != k.width || image.rows != k.height) {
+      result.reason = format("image is %dx%d but the camera intrinsics are for %dx%d", image.cols, image.rows,
+                             k.width, k.height);
+      return result;
+    }
+  }
+  computeMasks(image, order);
+  std::vector<std::vector<cv::Point>> outlines;
+  cv::findContours(pad_mask_, outlines, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  cv::findContours(strip_mask_, strip_outlines_, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+
+  result.reason = "no red region";
+  double rejected_area = 0.0;
+  const cv::Size size = image.size();
+  for (const auto& outline : outlines) {
+    const double area = cv::contourArea(outline);
+    if (area < params_.min_area_px) continue;
+    Candidate candidate = evaluate(outline, size, view);
+    const Detection& d = candidate.detection;
+    if (candidate.ok) {
+      if (!result.found || d.quality > result.quality) result = d;
+    } else if (!result.found && area > rejected_area) {
+      rejected_area = area;
+      result.reason = d.reason;
+    }
+  }
+  if (!result.found) return result;
+
+  const cv::Point2d axis = view ? cv::Point2d(view->intrinsics().cx, view->intrinsics().cy)
+                                : cv::Point2d((size.width - 1) / 2.0, (size.height - 1) / 2.0);
+  result.optical_axis_margin_px = cv::pointPolygonTest(result.outline, cv::Point2f(axis), true);
+  result.expected_side_px = view ? view->intrinsics().fx * params_.pad.side / view->cameraHeight() : 0.0;
+  result.reason.clear();
+  return result;
+}
+
+PadDetector::Candidate PadDetector::evaluate(const std::vector<cv::Point>& outline, const cv::Size& size,
+                                             const PlaneView* view) const {
+  Candidate candidate;
+  const bool touches_border = std::any_of(outline.begin(), outline.end(), [&](const cv::Point& p) {
+    return onBorder(p, size, params_.border_margin_px);
+  });
+  if (!touches_border) {
+    candidate.ok = evaluateWhole(outline, view, candidate);
+  } else if (!view) {
+    candidate.detection.reason = "pad cut by the image border and no camera geometry to complete it";
+  } else {
+    candidate.ok = evaluatePartial(outline, size, *view, candidate);
+  }
+  if (candidate.ok) {
+    candidate.detection.found = true;
+    candidate.detection.outline = outline;
+  }
+  return candidate;
+}
+
+const std::vector<cv::Point>* PadDetector::findStrip(const std::vector<cv::Point>& outline) const {
+  const std::vector<cv::Point>* best = nullptr;
+  double best_area = params_.min_strip_area_px;
+  for (const auto& strip : strip_outlines_) {
+    const cv::Moments m = cv::moments(strip);
+    if (m.m00 < best_area) continue;
+    const cv::Point2f centroid(float(m.m10 / m.m00), float(m.m01 / m.m00));
+    if (cv::pointPolygonTest(outline, centroid, false) < 0) continue;
+    best = &strip;
+    best_area = m.m00;
+  }
+  return best;
+}
+
+bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const PlaneView* view,
+                                Candidate& candidate) const {
+  const auto& p = params_;
+  Detection& d = candidate.detection;
+  const double area = cv::contourArea(outline);
+  std::vector<cv::Point> hull;
+  cv::convexHull(outline, hull);
+  const double solidity = area / std::max(cv::contourArea(hull), 1e-9);
+  if (solidity < p.min_solidity) {
+    d.reason = format("red region not convex (solidity %.2f < %.2f)", solidity, p.min_solidity);
+    return false;
+  }
+  std::vector<cv::Point> quad;
+  cv::approxPolyDP(hull, quad, p.approx_epsilon * cv::arcLength(hull, true), true);
+  if (quad.size() != 4 || !cv::isContourConvex(quad)) {
+    d.reason = format("red region has %d corners, not 4", int(quad.size()));
+    return false;
+  }
+  // Refine each side with a line through the outline points along its middle.
+  std::array<cv::Vec4f, 4> lines;
+  std::vector<cv::Point2f> support;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Point2d a = quad[k], b = quad[(k + 1) % 4];
+    const cv::Point2d side = b - a;
+    const double length = std::hypot(side.x, side.y);
+    const cv::Point2d dir = side / std::max(length, 1e-9);
+    const double max_distance = std::max(2.0, 0.05 * length);
+    support.clear();
+    for (const auto& q : outline) {
+      const cv::Point2d w = cv::Point2d(q) - a;
+      const double t = w.dot(dir) / length;
+      if (t > 0.15 && t < 0.85 && std::abs(w.x * dir.y - w.y * dir.x) <= max_distance) support.emplace_back(q);
+    }
+    if (support.size() >= 5)
+      cv::fitLine(support, lines[k], cv::DIST_L2, 0, 0.01, 0.01);
+    else
+      lines[k] = lineThrough(a, b);
+  }
+  for (int k = 0; k < 4; ++k) {
+    const auto corner = intersect(lines[(k + 3) % 4], lines[k]);
+    d.corners_px[k] = corner ? *corner : cv::Point2d(quad[k]);
+  }
+  const auto& c = d.corners_px;
+  std::array<double, 4> sides;
+  double worst_angle = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Point2d s = c[(k + 1) % 4] - c[k];
+    sides[k] = std::hypot(s.x, s.y);
+    worst_angle = std::max(worst_angle, std::abs(angleBetween(c[(k + 3) % 4] - c[k], s) / kDeg - 90.0));
+  }
+  const double side_ratio = *std::max_element(sides.begin(), sides.end()) /
+                            std::max(*std::min_element(sides.begin(), sides.end()), 1e-9);
+  d.side_px = (sides[0] + sides[1] + sides[2] + sides[3]) / 4.0;
+  const auto centre = intersect(lineThrough(c[0], c[2]), lineThrough(c[1], c[3]));
+  if (!centre) {
+    d.reason = "degenerate quadrilateral";
+    return false;
+  }
+  d.centre_px = *centre;
+
+  double size_term = 1.0, shape_term;
+  if (view) {
+    // On the plane the corners must make a square of the pad's size: this checks shape and size at once.
+    std::array<Eigen::Vector2d, 4> q;
+    for (int k = 0; k < 4; ++k) {
+      const auto hit = view->pixelToPlane(c[k]);
+      if (!hit) {
+        d.reason = "pad corner above the horizon";
+        return false;
+      }
+      q[k] = *hit;
+    }
+    double worst_size = 0.0, worst_right = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d s = q[(k + 1) % 4] - q[k], r = q[(k + 3) % 4] - q[k];
+      worst_size = std::max(worst_size, std::abs(s.norm() / p.pad.side - 1.0));
+      worst_right = std::max(worst_right, std::abs(std::acos(std::clamp(s.normalized().dot(r.normalized()), -1.0, 1.0)) / kDeg - 90.0));
+    }
+    if (worst_size > p.size_tolerance) {
+      d.reason = format("red square of the wrong size (a side is %.0f%% off %.2f m at %.2f m camera height)",
+                        100.0 * worst_size, p.pad.side, view->cameraHeight());
+      return false;
+    }
+    if (worst_right > p.max_edge_angle_error_deg) {
+      d.reason = format("red quadrilateral is not a square (corner %.0f deg off 90)", worst_right);
+      return false;
+    }
+    size_term = 1.0 - worst_size / std::max(p.size_tolerance, 1e-9);
+    shape_term = 1.0 - worst_right / std::max(p.max_edge_angle_error_deg, 1e-9);
+  } else {
+    if (side_ratio > p.max_side_ratio) {
+      d.reason = format("red quadrilateral too elongated (side ratio %.2f > %.2f)", side_ratio, p.max_side_ratio);
+      return false;
+    }
+    if (worst_angle > p.max_corner_angle_error_deg) {
+      d.reason = format("red quadrilateral is not a square (corner %.0f deg off 90)", worst_angle);
+      return false;
+    }
+    shape_term = 1.0 - worst_angle / std::max(p.max_corner_angle_error_deg, 1e-9);
+  }
+  const double solidity_term = (solidity - p.min_solidity) / std::max(1.0 - p.min_solidity, 1e-9);
+  d.quality = clamp01(0.4 + 0.6 * std::min({clamp01(size_term), clamp01(shape_term), clamp01(solidity_term)}));
+
+  if (const auto* strip = findStrip(outline)) {
+    const cv::Moments m = cv::moments(*strip);
+    d.strip_found = true;
+    d.strip_centre_px = cv::Point2d(m.m10 / m.m00, m.m01 / m.m00);
+  }
+  return true;
+}
+
+bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const cv::Size& size,
+                                  const PlaneView& view, Candidate& candidate) const {
+  const auto& p = params_;
+  const PadModel& pad = p.pad;
+  Detection& d = candidate.detection;
+  d.partial = true;
+  auto toPlane = [&](const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& plane, Eigen::Vector2d& centroid) {
+    plane.clear();
+    plane.reserve(pixels.size());
+    for (const auto& q : pixels) {
+      const auto hit = view.pixelToPlane(q);
+      if (!hit) return false;
+      plane.emplace_back(float(hit->x()), float(hit->y()));
+    }
+    const cv::Moments m = cv::moments(plane);
+    if (std::abs(m.m00) < 1e-9) return false;
+    centroid = Eigen::Vector2d(m.m10 / m.m00, m.m01 / m.m00);
+    return true;
+  };
+  std::vector<cv::Point2f> pad_plane, strip_plane;
+  Eigen::Vector2d pad_centroid, strip_centroid;
+  if (!toPlane(outline, pad_plane, pad_centroid)) {
+    d.reason = "red region reaches above the horizon";
+    return false;
+  }
+  std::vector<PlaneSegment> pad_segments = planeSegments(outline, pad_plane, size, p);
+  std::vector<PlaneSegment> strip_segments;  // filled below when the strip is in view
+  const std::vector<cv::Point>* strip = findStrip(outline);
+  if (strip && toPlane(*strip, strip_plane, strip_centroid)) strip_segments = planeSegments(*strip, strip_plane, size, p);
+  if (pad_segments.empty() && strip_segments.empty()) {
+    d.reason = "pad cut by the image border with no straight edge in view";
+    return false;
+  }
+
+  // Orientation of the square modulo 90 deg: length-weighted mean of the edges' angles times 4.
+  double c4 = 0.0, s4 = 0.0;
+  for (const std::vector<PlaneSegment>* set : {&pad_segments, &strip_segments})
+    for (const auto& s : *set) {
+      const double a = std::atan2(s.direction.y(), s.direction.x());
+      c4 += s.length_px * std::cos(4.0 * a);
+      s4 += s.length_px * std::sin(4.0 * a);
+    }
+  const double theta = std::atan2(s4, c4) / 4.0;
+  const Eigen::Vector2d axes[2] = {{std::cos(theta), std::sin(theta)}, {-std::sin(theta), std::cos(theta)}};
+
+  // Pieces longer than must_fit_px must be at right angles; shorter ones may be where an edge meets
+  // the border.
+  auto toLines = [&](const std::vector<PlaneSegment>& segments, const Eigen::Vector2d& centroid, double must_fit_px,
+                     std::vector<EdgeLine>& lines) {
+    for (const auto& s : segments) {
+      const double deviation = std::remainder(std::atan2(s.direction.y(), s.direction.x()) - theta, kPi / 2.0);
+      if (std::abs(deviation) > p.max_edge_angle_error_deg * kDeg) {
+        if (s.length_px > must_fit_px) {
+          d.reason = format("red region's edges are not at right angles (%.0f deg off)", std::abs(deviation) / kDeg);
+          return false;
+        }
+        continue;
+      }
+      // An edge along u fixes the coordinate along v, and vice versa.
+      const int normal_axis = std::abs(s.direction.dot(axes[0])) > std::abs(s.direction.dot(axes[1])) ? 1 : 0;
+      const double offset = axes[normal_axis].dot(s.centre);
+      const double side = axes[normal_axis].dot(centroid) - offset;
+      if (std::abs(side) < 1e-4) continue;
+      lines.push_back({normal_axis, offset, side > 0 ? 1 : -1, s.length_px});
+    }
+    return true;
+  };
+  std::vector<EdgeLine> pad_raw, strip_raw;
+  const double side_px = view.intrinsics().fx * pad.side / view.cameraHeight();
+  if (!toLines(pad_segments, pad_centroid, 0.15 * side_px, pad_raw) ||
+      !toLines(strip_segments, strip_centroid, 0.5 * pad.strip_length / pad.side * side_px, strip_raw))
+    return false;
+  const auto pad_lines = clusterLines(pad_raw, 0.1 * pad.side);
+  const auto strip_lines = clusterLines(strip_raw, 0.3 * pad.strip_width);
+  if (!pad_lines || !strip_lines) {
+    d.reason = "red region's outline is not convex";
+    return false;
+  }
+  for (int axis = 0; axis < 2; ++axis) {
+    std::vector<EdgeLine> parallel;
+    for (const auto& l : *pad_lines)
+      if (l.normal_axis == axis) parallel.push_back(l);
+    if (parallel.size() > 2) {
+      d.reason = format("%d parallel red edges: not a square", int(parallel.size()));
+      return false;
+    }
+    if (parallel.size() == 2) {
+      const double gap = parallel[1].offset - parallel[0].offset;
+      if (parallel[0].interior != 1 || parallel[1].interior != -1 ||
+          std::abs(gap / pad.side - 1.0) > p.size_tolerance) {
+        d.reason = format("opposite red edges %.2f m apart, the pad is %.2f m", gap, pad.side);
+        return false;
+      }
+    }
+  }
+
+  // Hypotheses on the pad's forward axis (which the strip's position reveals): none (pad edges only),
+  // or +-u, +-v. Each gives the centre by weighted least squares per axis; it must explain every
+  // edge, and every outline point must lie within the square (and the strip's within the strip).
+  struct Hypothesis {
+    int forward_axis;  // -1: strip not used
+    int forward_sign;
+    bool observable = false, consistent = false;
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    double rms = 0.0, outside = 1.0;
+  };
+  std::vector<Hypothesis> hypotheses{{-1, 0}};
+  if (!strip_lines->empty())
+    for (int axis = 0; axis < 2; ++axis)
+      for (int sign : {1, -1}) hypotheses.push_back({axis, sign});
+  const double tolerance = p.fit_tolerance_m + 2.0 * view.metresPerPixel();
+  for (auto& h : hypotheses) {
+    std::vector<std::pair<int, std::pair<double, double>>> estimates;  // axis, (value, weight)
+    for (const auto& l : *pad_lines) estimates.push_back({l.normal_axis, {l.offset + l.interior * pad.side / 2, l.weight}});
+    if (h.forward_axis >= 0)
+      for (const auto& l : *strip_lines) {
+        const bool along_forward = l.normal_axis == h.forward_axis;
+        const double strip_centre = l.offset + l.interior * (along_forward ? pad.strip_width : pad.strip_length) / 2;
+        estimates.push_back(
+            {l.normal_axis, {strip_centre - (along_forward ? h.forward_sign * pad.strip_offset : 0.0), l.weight}});
+      }
+    double sum_w[2] = {0, 0}, sum_we[2] = {0, 0};
+    for (const auto& [axis, e] : estimates) {
+      sum_w[axis] += e.second;
+      sum_we[axis] += e.second * e.first;
+    }
+    // Short pieces of edge give poor directions, and a centre half a metre away amplifies that.
+    h.observable = sum_w[0] >= p.min_partial_support_px && sum_w[1] >= p.min_partial_support_px;
+    if (!h.observable) continue;
+    const double c[2] = {sum_we[0] / sum_w[0], sum_we[1] / sum_w[1]};
+    double worst = 0.0, sum_sq = 0.0, total_w = 0.0;
+    for (const auto& [axis, e] : estimates) {
+      worst = std::max(worst, std::abs(e.first - c[axis]));
+      sum_sq += e.second * (e.first - c[axis]) * (e.first - c[axis]);
+      total_w += e.second;
+    }
+    h.rms = std::sqrt(sum_sq / total_w);
+    h.centre = c[0] * axes[0] + c[1] * axes[1];
+    int outside = 0, checked = 0;
+    const double half = pad.side / 2 + tolerance;
+    for (const auto& q : pad_plane) {
+      const Eigen::Vector2d r = Eigen::Vector2d(q.x, q.y) - h.centre;
+      outside += std::abs(r.dot(axes[0])) > half || std::abs(r.dot(axes[1])) > half;
+      ++checked;
+    }
+    if (h.forward_axis >= 0) {
+      const Eigen::Vector2d forward = h.forward_sign * axes[h.forward_axis], left = axes[1 - h.forward_axis];
+      const Eigen::Vector2d strip_centre = h.centre + pad.strip_offset * forward;
+      for (const auto& q : strip_plane) {
+        const Eigen::Vector2d r = Eigen::Vector2d(q.x, q.y) - strip_centre;
+        outside += std::abs(r.dot(forward)) > pad.strip_width / 2 + tolerance ||
+                   std::abs(r.dot(left)) > pad.strip_length / 2 + tolerance;
+        ++checked;
+      }
+    }
+    h.outside = double(outside) / std::max(checked, 1);
+    h.consistent = worst <= tolerance && h.outside <= 0.02;
+  }
+  const Hypothesis* chosen = nullptr;
+  const Hypothesis& edges_only = hypotheses.front();
+  auto better = [](const Hypothesis* a, const Hypothesis& b) {
+    return !a || b.outside + b.rms < a->outside + a->rms;
+  };
+  if (edges_only.observable) {
+    if (!edges_only.consistent) {
+      d.reason = format("red edges do not fit a %.2f m square (%.0f%% of the outline outside)", pad.side,
+                        100.0 * edges_only.outside);
+      return false;
+    }
+    chosen = &edges_only;
+    // The strip adds support (and the heading) when some placement of it agrees with the edges.
+    const Hypothesis* with_strip = nullptr;
+    for (size_t i = 1; i < hypotheses.size(); ++i) {
+      const auto& h = hypotheses[i];
+      if (h.consistent && (h.centre - edges_only.centre).norm() <= tolerance && better(with_strip, h)) with_strip = &h;
+    }
+    if (with_strip) chosen = with_strip;
+  } else {
+    for (size_t i = 1; i < hypotheses.size(); ++i)
+      if (hypotheses[i].consistent && better(chosen, hypotheses[i])) chosen = &hypotheses[i];
+    if (!chosen) {
+      d.reason = "pad cut by the image border: too little of it in view to place its centre";
+      return false;
+    }
+    for (size_t i = 1; i < hypotheses.size(); ++i) {
+      const auto& h = hypotheses[i];
+      if (&h != chosen && h.consistent && (h.centre - chosen->centre).norm() > tolerance) {
+        d.reason = "pad cut by the image border: its centre is ambiguous from what is in view";
+        return false;
+      }
+    }
+  }
+
+  const auto centre_px = view.planeToPixel(chosen->centre);
+  if (!centre_px) {
+    d.reason = "pad centre behind the camera";
+    return false;
+  }
+  d.centre_px = *centre_px;
+  const double half = pad.side / 2;
+  const Eigen::Vector2d corner_offsets[4] = {half * (axes[0] + axes[1]), half * (-axes[0] + axes[1]),
+                                             half * (-axes[0] - axes[1]), half * (axes[0] - axes[1])};
+  for (int k = 0; k < 4; ++k) {
+    const auto corner = view.planeToPixel(chosen->centre + corner_offsets[k]);
+    d.corners_px[k] = corner ? *corner : d.centre_px;
+  }
+  d.side_px = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Point2d s = d.corners_px[(k + 1) % 4] - d.corners_px[k];
+    d.side_px += std::hypot(s.x, s.y) / 4.0;
+  }
+  if (chosen->forward_axis >= 0) {
+    const auto strip_px = view.planeToPixel(chosen->centre + pad.strip_offset * chosen->forward_sign * axes[chosen->forward_axis]);
+    d.strip_found = strip_px.has_value();
+    if (strip_px) d.strip_centre_px = *strip_px;
+  }
+  double support = 0.0;
+  for (const auto& l : *pad_lines) support += l.weight;
+  if (chosen->forward_axis >= 0)
+    for (const auto& l : *strip_lines) support += l.weight;
+  // Partial pads rank below whole ones; more visible edge and a tighter fit raise the quality.
+  d.quality = clamp01(0.8 * std::min(1.0, support / (2.0 * side_px)) * std::exp(-chosen->rms / p.fit_tolerance_m) *
+                      (1.0 - 10.0 * chosen->outside));
+  return true;
+}
+
+}  // namespace uav_vision

@@ -1,0 +1,89 @@
+#include "uav_vision/pad_localizer.h"
+
+#include <cmath>
+
+namespace uav_vision {
+
+PadLocalizer::PadLocalizer(const PadLocalizerParams& params, const CameraMount& mount)
+    : params_(params), mount_(mount), detector_(params.detector), height_estimator_(params.height) {}
+
+Surface PadLocalizer::surfaceUnderSonar(const Detection& detection) const {
+  if (!detection.found) return Surface::kUnknown;
+  if (detection.optical_axis_margin_px > params_.sonar_footprint_margin_px) return Surface::kPad;
+  if (detection.optical_axis_margin_px < -params_.sonar_footprint_margin_px) return Surface::kGround;
+  return Surface::kUnknown;
+}
+
+void PadLocalizer::locate(const PlaneView& view, PadObservation& observation) const {
+  const Detection& d = observation.detection;
+  if (!d.found) {
+    observation.reason = d.reason;
+    return;
+  }
+  const auto centre = view.pixelToPlane(d.centre_px);
+  if (!centre) {
+    observation.reason = "pad centre does not project onto the pad plane";
+    return;
+  }
+  observation.found = true;
+  observation.centre_in_body = view.fromBaseInBody(*centre);
+  observation.centre_world_aligned = view.fromBaseWorldAligned(*centre);
+  if (d.strip_found) {
+    if (const auto strip = view.pixelToPlane(d.strip_centre_px)) {
+      observation.strip_found = true;
+      observation.strip_in_body = view.fromBaseInBody(*strip);
+      observation.strip_world_aligned = view.fromBaseWorldAligned(*strip);
+      const Eigen::Vector2d forward = *strip - *centre;
+      observation.pad_yaw = std::atan2(forward.y(), forward.x());
+    }
+  }
+}
+
+PadObservation PadLocalizer::observeAtHeight(const cv::Mat& image, ColorOrder order,
+                                             const CameraIntrinsics& intrinsics,
+                                             const Eigen::Quaterniond& world_from_body, double camera_height) const {
+  PadObservation observation;
+  observation.height.valid = true;
+  observation.height.camera_height = camera_height;
+  const PlaneView view(intrinsics, mount_, world_from_body, camera_height);
+  if (!view.problem().empty()) {
+    observation.reason = view.problem();
+    return observation;
+  }
+  observation.detection = detector_.detect(image, order, &view);
+  locate(view, observation);
+  return observation;
+}
+
+PadObservation PadLocalizer::observe(const cv::Mat& image, ColorOrder order, const CameraIntrinsics& intrinsics,
+                                     const Eigen::Quaterniond& world_from_body, double sonar_range,
+                                     double baro_altitude) const {
+  HeightEstimate height = height_estimator_.estimate(sonar_range, baro_altitude, world_from_body);
+  if (!height.valid) {
+    PadObservation observation;
+    observation.height = height;
+    observation.reason = "no camera height: " + height.reason;
+    return observation;
+  }
+  PadObservation observation = observeAtHeight(image, order, intrinsics, world_from_body, height.camera_height);
+  observation.height = height;
+  if (height.ambiguous) {
+    // The barometer cannot tell whether the sonar hits the pad or the ground; the image can, and a
+    // wrong guess shows as a pad of the wrong size (whole) or a bad fit (partial).
+    const Surface assumed = height.source == HeightEstimate::Source::kSonarOnPad ? Surface::kPad : Surface::kGround;
+    const Surface seen = surfaceUnderSonar(observation.detection);
+    if (!observation.found || (seen != Surface::kUnknown && seen != assumed)) {
+      const Surface other = assumed == Surface::kPad ? Surface::kGround : Surface::kPad;
+      const HeightEstimate retry_height =
+          height_estimator_.estimate(sonar_range, baro_altitude, world_from_body, other);
+      PadObservation retry =
+          observeAtHeight(image, order, intrinsics, world_from_body, retry_height.camera_height);
+      retry.height = retry_height;
+      const Surface retry_seen = surfaceUnderSonar(retry.detection);
+      if (retry.found && (retry_seen == Surface::kUnknown || retry_seen == other)) return retry;
+    }
+  }
+  return observation;
+}
+
+}  // namespace uav_vision

@@ -1,0 +1,314 @@
+#include "uav_vision/platform_detection_ros.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <cv_bridge/cv_bridge.h>
+#include <geometry_msgs/PointStamped.h>
+#include <opencv2/imgproc.hpp>
+#include <sensor_msgs/image_encodings.h>
+
+namespace uav_vision {
+
+namespace {
+
+template <typename T>
+T required(const ros::NodeHandle& pnh, const std::string& key) {
+  T value;
+  if (!pnh.hasParam(key))
+    throw ConfigError("required parameter '" + pnh.resolveName(key) +
+                      "' is missing: load config/platform_detection.yaml (see launch/platform_detection.launch)");
+  if (!pnh.getParam(key, value))
+    throw ConfigError("parameter '" + pnh.resolveName(key) + "' has the wrong type (see config/platform_detection.yaml)");
+  return value;
+}
+
+void requirePositive(const ros::NodeHandle& pnh, const std::string& key, double value) {
+  if (!(std::isfinite(value) && value > 0.0))
+    throw ConfigError("parameter '" + pnh.resolveName(key) + "' must be a positive number of seconds");
+}
+
+geometry_msgs::PointStamped pointMsg(const std_msgs::Header& image_header, const std::string& frame,
+                                     const Eigen::Vector3d& p) {
+  geometry_msgs::PointStamped msg;
+  msg.header.stamp = image_header.stamp;
+  msg.header.frame_id = frame;
+  msg.point.x = p.x();
+  msg.point.y = p.y();
+  msg.point.z = p.z();
+  return msg;
+}
+
+}  // namespace
+
+PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh) {
+  PlatformDetectionConfig c;
+  auto num = [&](const std::string& key) { return required<double>(pnh, key); };
+  auto integer = [&](const std::string& key) { return required<int>(pnh, key); };
+  auto& h = c.localizer.height;
+  h.height_landing_platform = num("height_landing_platform");
+  c.base_frame = required<std::string>(pnh, "frames/base");
+  c.world_frame = required<std::string>(pnh, "frames/world");
+  auto& d = c.localizer.detector;
+  d.pad.side = num("pad/side");
+  d.pad.strip_length = num("pad/strip_length");
+  d.pad.strip_width = num("pad/strip_width");
+  d.pad.strip_offset = num("pad/strip_offset");
+  h.camera_below_base_link = num("drone/camera_below_base_link");
+  h.sonar_below_base_link = num("drone/sonar_below_base_link");
+  h.sonar_max_range = num("drone/sonar_max_range");
+  h.baro_tolerance = num("drone/baro_tolerance");
+  h.max_tilt_deg = num("drone/max_tilt_deg");
+  d.red_hue_low_max = integer("colour/red_hue_low_max");
+  d.red_hue_high_min = integer("colour/red_hue_high_min");
+  d.red_saturation_min = integer("colour/red_saturation_min");
+  d.red_value_min = integer("colour/red_value_min");
+  d.green_hue_min = integer("colour/green_hue_min");
+  d.green_hue_max = integer("colour/green_hue_max");
+  d.green_saturation_min = integer("colour/green_saturation_min");
+  d.green_value_min = integer("colour/green_value_min");
+  d.morphology_kernel_px = integer("shape/morphology_kernel_px");
+  d.min_area_px = num("shape/min_area_px");
+  d.min_solidity = num("shape/min_solidity");
+  d.approx_epsilon = num("shape/approx_epsilon");
+  d.max_side_ratio = num("shape/max_side_ratio");
+  d.max_corner_angle_error_deg = num("shape/max_corner_angle_error_deg");
+  d.size_tolerance = num("shape/size_tolerance");
+  d.max_edge_angle_error_deg = num("shape/max_edge_angle_error_deg");
+  d.border_margin_px = num("shape/border_margin_px");
+  d.min_edge_length_px = num("shape/min_edge_length_px");
+  d.fit_tolerance_m = num("shape/fit_tolerance_m");
+  d.min_partial_support_px = num("shape/min_partial_support_px");
+  d.min_strip_area_px = num("shape/min_strip_area_px");
+  c.localizer.sonar_footprint_margin_px = num("shape/sonar_footprint_margin_px");
+  c.odom_timeout = num("timing/odom_timeout");
+  c.imu_max_offset = num("timing/imu_max_offset");
+  c.sonar_timeout = num("timing/sonar_timeout");
+  c.altimeter_timeout = num("timing/altimeter_timeout");
+  c.warn_period = num("timing/warn_period");
+  for (const char* key : {"timing/odom_timeout", "timing/imu_max_offset", "timing/sonar_timeout",
+                          "timing/altimeter_timeout", "timing/warn_period"})
+    requirePositive(pnh, key, num(key));
+  if (c.base_frame.empty() || c.world_frame.empty())
+    throw ConfigError("parameters '" + pnh.resolveName("frames") + "/base' and '/world' must not be empty");
+  if (const std::string problem = PadDetector::validate(d); !problem.empty())
+    throw ConfigError("invalid detector parameter in " + pnh.getNamespace() + ": " + problem);
+  if (const std::string problem = PadHeightEstimator::validate(h); !problem.empty())
+    throw ConfigError("invalid height parameter in " + pnh.getNamespace() + ": " + problem);
+  return c;
+}
+
+PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle pnh)
+    : config_(PlatformDetectionConfig::load(pnh)),
+      localizer_(config_.localizer, CameraMount::bottomCamera(config_.localizer.height.camera_below_base_link)),
+      image_transport_(nh) {
+  platform_in_base_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_ardrone", 10);
+  platform_in_world_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_world", 10);
+  indicator_in_base_pub_ =
+      nh.advertise<geometry_msgs::PointStamped>("platform/current_indicator_position_in_ardrone", 10);
+  debug_pub_ = image_transport_.advertise("platform_detection/debug_image", 1);
+  camera_info_sub_ = nh.subscribe("ardrone/bottom/camera_info", 5, &PlatformDetectionRos::onCameraInfo, this);
+  imu_sub_ = nh.subscribe("ardrone/imu", 50, &PlatformDetectionRos::onImu, this);
+  sonar_sub_ = nh.subscribe("ardrone/sonar_height", 10, &PlatformDetectionRos::onSonar, this);
+  altimeter_sub_ = nh.subscribe("ardrone/altimeter", 10, &PlatformDetectionRos::onAltimeter, this);
+  odom_sub_ = nh.subscribe("ardrone/odom_estimate", 10, &PlatformDetectionRos::onOdomEstimate, this);
+  // Queue of one: always work on the newest frame, never on a backlog.
+  image_sub_ = image_transport_.subscribe("ardrone/bottom/image_raw", 1, &PlatformDetectionRos::onImage, this);
+  ROS_INFO("platform_detection: looking for a %.2f m pad whose top is %.3f m above the ground",
+           config_.localizer.detector.pad.side, config_.localizer.height.height_landing_platform);
+}
+
+void PlatformDetectionRos::onCameraInfo(const sensor_msgs::CameraInfoConstPtr& msg) {
+  CameraIntrinsics k;
+  k.fx = msg->K[0];
+  k.fy = msg->K[4];
+  k.cx = msg->K[2];
+  k.cy = msg->K[5];
+  k.width = int(msg->width);
+  k.height = int(msg->height);
+  if (const std::string problem = k.problem(); !problem.empty()) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped: %s", camera_info_sub_.getTopic().c_str(), problem.c_str());
+    return;
+  }
+  if (std::any_of(msg->D.begin(), msg->D.end(), [](double v) { return v != 0.0; }))
+    ROS_WARN_ONCE("%s: non-zero distortion is ignored (the pinhole model assumes a rectified image)",
+                  camera_info_sub_.getTopic().c_str());
+  intrinsics_ = k;
+}
+
+void PlatformDetectionRos::onImu(const sensor_msgs::ImuConstPtr& msg) {
+  const auto& o = msg->orientation;
+  const Eigen::Quaterniond q(o.w, o.x, o.y, o.z);
+  // covariance[0] == -1 means "no orientation" (REP 145).
+  if (!(q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 0.1) || msg->orientation_covariance[0] == -1.0) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a message without a valid orientation quaternion",
+                      imu_sub_.getTopic().c_str());
+    return;
+  }
+  const ros::Time stamp = msg->header.stamp;
+  // Sim time jumped back (simulator restarted): the old attitudes belong to another timeline.
+  if (!attitudes_.empty() && stamp < attitudes_.back().first) attitudes_.clear();
+  attitudes_.emplace_back(stamp, q.normalized());
+  while (!attitudes_.empty() && (stamp - attitudes_.front().first).toSec() > 1.0) attitudes_.pop_front();
+}
+
+void PlatformDetectionRos::onSonar(const sensor_msgs::RangeConstPtr& msg) {
+  // +inf is a valid reading (nothing in range); NaN or negative is not.
+  if (std::isnan(msg->range) || msg->range < 0.0) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped an invalid range %f", sonar_sub_.getTopic().c_str(),
+                      msg->range);
+    return;
+  }
+  sonar_ = std::make_pair(msg->header.stamp, double(msg->range));
+}
+
+void PlatformDetectionRos::onAltimeter(const landing_msgs::AltimeterConstPtr& msg) {
+  if (!std::isfinite(msg->altitude)) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a non-finite altitude", altimeter_sub_.getTopic().c_str());
+    return;
+  }
+  altitude_ = std::make_pair(msg->header.stamp, double(msg->altitude));
+}
+
+void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg) {
+  const auto& p = msg->pose.pose.position;
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a non-finite position", odom_sub_.getTopic().c_str());
+    return;
+  }
+  if (!msg->header.frame_id.empty() && msg->header.frame_id != config_.world_frame) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped: position in frame '%s', expected '%s'",
+                      odom_sub_.getTopic().c_str(), msg->header.frame_id.c_str(), config_.world_frame.c_str());
+    return;
+  }
+  odom_estimate_ = msg;
+}
+
+std::optional<Eigen::Quaterniond> PlatformDetectionRos::attitudeAt(const ros::Time& stamp) const {
+  if (attitudes_.empty()) return std::nullopt;
+  // First attitude not older than the image; interpolate with the one before when both exist.
+  const auto later = std::lower_bound(attitudes_.begin(), attitudes_.end(), stamp,
+                                      [](const auto& a, const ros::Time& t) { return a.first < t; });
+  if (later != attitudes_.end() && later != attitudes_.begin()) {
+    const auto earlier = std::prev(later);
+    const double span = (later->first - earlier->first).toSec();
+    if (span <= 2.0 * config_.imu_max_offset) {
+      const double f = span > 0.0 ? (stamp - earlier->first).toSec() / span : 0.0;
+      return earlier->second.slerp(f, later->second);
+    }
+  }
+  const auto& nearest = later == attitudes_.end() ? attitudes_.back() : *later;
+  if (std::abs((nearest.first - stamp).toSec()) <= config_.imu_max_offset) return nearest.second;
+  return std::nullopt;
+}
+
+double PlatformDetectionRos::freshValue(const std::optional<std::pair<ros::Time, double>>& reading,
+                                        const ros::Time& stamp, double timeout) {
+  if (!reading || std::abs((stamp - reading->first).toSec()) > timeout) return NAN;
+  return reading->second;
+}
+
+void PlatformDetectionRos::onImage(const sensor_msgs::ImageConstPtr& msg) {
+  namespace enc = sensor_msgs::image_encodings;
+  const double period = config_.warn_period;
+  const std::string topic_name = image_sub_.getTopic();
+  const char* topic = topic_name.c_str();
+  ColorOrder order;
+  if (msg->encoding == enc::RGB8) {
+    order = ColorOrder::kRgb;
+  } else if (msg->encoding == enc::BGR8) {
+    order = ColorOrder::kBgr;
+  } else {
+    ROS_WARN_THROTTLE(period, "%s: dropped a frame with encoding '%s' (rgb8 or bgr8 expected)", topic,
+                      msg->encoding.c_str());
+    return;
+  }
+  if (msg->width == 0 || msg->height == 0 || msg->step < msg->width * 3 ||
+      msg->data.size() < size_t(msg->step) * msg->height) {
+    ROS_WARN_THROTTLE(period, "%s: dropped a %ux%u frame whose step (%u) or data size (%zu) does not fit", topic,
+                      msg->width, msg->height, msg->step, msg->data.size());
+    return;
+  }
+  if (!intrinsics_) {
+    ROS_WARN_THROTTLE(period, "%s: no valid %s yet: frame dropped", topic, camera_info_sub_.getTopic().c_str());
+    return;
+  }
+  if (int(msg->width) != intrinsics_->width || int(msg->height) != intrinsics_->height) {
+    ROS_WARN_THROTTLE(period, "%s: dropped a %ux%u frame: %s is for %dx%d", topic, msg->width, msg->height,
+                      camera_info_sub_.getTopic().c_str(), intrinsics_->width, intrinsics_->height);
+    return;
+  }
+  const ros::Time stamp = msg->header.stamp;
+  const auto attitude = attitudeAt(stamp);
+  if (!attitude) {
+    ROS_WARN_THROTTLE(period, "%s: no %s within %.3f s of the frame: dropped", topic, imu_sub_.getTopic().c_str(),
+                      config_.imu_max_offset);
+    return;
+  }
+  const double sonar = freshValue(sonar_, stamp, config_.sonar_timeout);
+  const double altitude = freshValue(altitude_, stamp, config_.altimeter_timeout);
+  if (std::isnan(sonar) && std::isnan(altitude)) {
+    ROS_WARN_THROTTLE(period, "%s: no recent %s or %s to give the height: frame dropped", topic,
+                      sonar_sub_.getTopic().c_str(), altimeter_sub_.getTopic().c_str());
+    return;
+  }
+  cv_bridge::CvImageConstPtr image;
+  try {
+    image = cv_bridge::toCvShare(msg);
+  } catch (const cv_bridge::Exception& e) {
+    ROS_WARN_THROTTLE(period, "%s: dropped a frame cv_bridge cannot read: %s", topic, e.what());
+    return;
+  }
+  const PadObservation observation = localizer_.observe(image->image, order, *intrinsics_, *attitude, sonar, altitude);
+  if (observation.found)
+    publish(msg->header, observation);
+  else
+    ROS_DEBUG_THROTTLE(1.0, "no pad: %s", observation.reason.c_str());
+  if (debug_pub_.getNumSubscribers() > 0) publishDebugImage(msg, image->image, observation, *intrinsics_);
+}
+
+void PlatformDetectionRos::publish(const std_msgs::Header& image_header, const PadObservation& observation) {
+  platform_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.centre_in_body));
+  if (observation.strip_found)
+    indicator_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.strip_in_body));
+  const bool odom_fresh =
+      odom_estimate_ && std::abs((image_header.stamp - odom_estimate_->header.stamp).toSec()) <= config_.odom_timeout;
+  if (!odom_fresh) {
+    ROS_WARN_THROTTLE(config_.warn_period, "no %s within %.2f s of the frame: publishing the relative pad position only",
+                      odom_sub_.getTopic().c_str(), config_.odom_timeout);
+    return;
+  }
+  // The estimate's own orientation is not needed: the IMU attitude already turned the vector to world axes.
+  const auto& p = odom_estimate_->pose.pose.position;
+  platform_in_world_pub_.publish(
+      pointMsg(image_header, config_.world_frame, Eigen::Vector3d(p.x, p.y, p.z) + observation.centre_world_aligned));
+}
+
+void PlatformDetectionRos::publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image,
+                                             const PadObservation& observation, const CameraIntrinsics& intrinsics) {
+  cv::Mat canvas = image.clone();
+  const bool rgb = msg->encoding == sensor_msgs::image_encodings::RGB8;
+  auto colour = [rgb](int b, int g, int r) { return rgb ? cv::Scalar(r, g, b) : cv::Scalar(b, g, r); };
+  const Detection& d = observation.detection;
+  cv::drawMarker(canvas, cv::Point2d(intrinsics.cx, intrinsics.cy), colour(255, 255, 255), cv::MARKER_CROSS, 8, 1);
+  if (!d.outline.empty())
+    cv::polylines(canvas, std::vector<std::vector<cv::Point>>{d.outline}, true, colour(0, 255, 255), 1);
+  std::string text;
+  if (observation.found) {
+    for (int k = 0; k < 4; ++k)
+      cv::line(canvas, d.corners_px[k], d.corners_px[(k + 1) % 4], colour(255, 0, 255), 1, cv::LINE_AA);
+    cv::drawMarker(canvas, d.centre_px, colour(255, 255, 0), cv::MARKER_CROSS, 12, 2);
+    if (d.strip_found) cv::circle(canvas, d.strip_centre_px, 4, colour(0, 255, 0), 2);
+    char buffer[128];
+    std::snprintf(buffer, sizeof(buffer), "%s x=%.2f y=%.2f h=%.2f q=%.2f", d.partial ? "partial" : "pad",
+                  observation.centre_in_body.x(), observation.centre_in_body.y(), observation.height.camera_height,
+                  d.quality);
+    text = buffer;
+  } else {
+    text = observation.reason;
+  }
+  cv::putText(canvas, text, {4, canvas.rows - 6}, cv::FONT_HERSHEY_SIMPLEX, 0.35, colour(255, 255, 255), 1, cv::LINE_AA);
+  debug_pub_.publish(cv_bridge::CvImage(msg->header, msg->encoding, canvas).toImageMsg());
+}
+
+}  // namespace uav_vision

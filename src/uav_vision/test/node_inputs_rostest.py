@@ -1,0 +1,189 @@
+#!/usr/bin/env python3
+"""rostest of the platform_detection node alone, fed by this test: a synthetic frame gives the expected
+pad position; bad inputs (empty or odd-sized image, wrong encoding, zero focal length, NaN IMU, sonar,
+altimeter, odometry) are dropped with a warning naming the topic and the node keeps working; the debug
+image comes when subscribed; a missing parameter stops the node with a message naming it."""
+import os
+import subprocess
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+from geometry_msgs.msg import PointStamped
+from landing_msgs.msg import Altimeter
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Log
+from sensor_msgs.msg import CameraInfo, Image, Imu, Range
+
+WALL_TIMEOUT = 60.0
+FX = 256.0
+SIDE_PX = 100                      # the pad's side in the synthetic image
+CAMERA_HEIGHT = FX * 1.0 / SIDE_PX  # camera height above the pad that makes a 1 m pad 100 px wide [m]
+PAD_TOP = 0.497
+
+
+def wait_for(condition, what, timeout=WALL_TIMEOUT):
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline or rospy.is_shutdown():
+            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
+        time.sleep(0.01)
+
+
+def pad_image(width=320, height=240):
+    """Grey ground with a red 1 m pad centred 20 px right of the image centre, rgb8."""
+    image = np.full((height, width, 3), (110, 112, 108), np.uint8)
+    cx, cy = (width - 1) / 2.0 + 20, (height - 1) / 2.0
+    x0, y0 = int(round(cx - SIDE_PX / 2 + 0.5)), int(round(cy - SIDE_PX / 2 + 0.5))
+    image[y0:y0 + SIDE_PX, x0:x0 + SIDE_PX] = (217, 38, 38)
+    return image
+
+
+def image_msg(stamp, array=None, encoding="rgb8", width=None, height=None, step=None, data=None):
+    msg = Image()
+    msg.header.stamp, msg.header.frame_id = stamp, "ardrone/bottom_camera"
+    if array is not None:
+        msg.height, msg.width = array.shape[:2]
+        msg.step, msg.data = array.shape[1] * array.shape[2], array.tobytes()
+    msg.encoding = encoding
+    if width is not None:
+        msg.width = width
+    if height is not None:
+        msg.height = height
+    if step is not None:
+        msg.step = step
+    if data is not None:
+        msg.data = data
+    return msg
+
+
+def camera_info(stamp, fx=FX):
+    msg = CameraInfo(width=320, height=240, distortion_model="plumb_bob", D=[0.0] * 5,
+                     K=[fx, 0, 159.5, 0, fx, 119.5, 0, 0, 1], R=[1, 0, 0, 0, 1, 0, 0, 0, 1],
+                     P=[fx, 0, 159.5, 0, 0, fx, 119.5, 0, 0, 0, 1, 0])
+    msg.header.stamp, msg.header.frame_id = stamp, "ardrone/bottom_camera"
+    return msg
+
+
+class NodeInputsTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("node_inputs_test")
+        cls.points = []
+        cls.warnings = []
+        rospy.Subscriber("/platform/current_platform_position_in_ardrone", PointStamped, cls.points.append)
+        rospy.Subscriber("/rosout", Log, lambda m: cls.warnings.append(m.msg) if m.level >= Log.WARN else None,
+                         queue_size=100)
+        cls.pub = {
+            "image": rospy.Publisher("/ardrone/bottom/image_raw", Image, queue_size=5),
+            "info": rospy.Publisher("/ardrone/bottom/camera_info", CameraInfo, queue_size=5),
+            "imu": rospy.Publisher("/ardrone/imu", Imu, queue_size=5),
+            "sonar": rospy.Publisher("/ardrone/sonar_height", Range, queue_size=5),
+            "altimeter": rospy.Publisher("/ardrone/altimeter", Altimeter, queue_size=5),
+            "odom": rospy.Publisher("/ardrone/odom_estimate", Odometry, queue_size=5),
+        }
+        for name, pub in cls.pub.items():
+            wait_for(lambda p=pub: p.get_num_connections() > 0, "platform_detection to subscribe to " + pub.name)
+
+    def publish_sensors(self, stamp, imu_quat=(1.0, 0.0, 0.0, 0.0), sonar=CAMERA_HEIGHT - 0.03,
+                        altitude=CAMERA_HEIGHT + 0.035 + PAD_TOP, fx=FX):
+        self.pub["info"].publish(camera_info(stamp, fx))
+        imu = Imu()
+        imu.header.stamp, imu.header.frame_id = stamp, "ardrone/base_link"
+        imu.orientation.w, imu.orientation.x, imu.orientation.y, imu.orientation.z = imu_quat
+        self.pub["imu"].publish(imu)
+        rng = Range(range=sonar, min_range=0.02, max_range=6.0)
+        rng.header.stamp = stamp
+        self.pub["sonar"].publish(rng)
+        alt = Altimeter(altitude=altitude)
+        alt.header.stamp = stamp
+        self.pub["altimeter"].publish(alt)
+
+    def detect_once(self):
+        """A good frame with good sensors: returns the published pad position. The frame is sent again
+        until its result comes, as the sensor messages travel on other connections and may arrive later."""
+        stamp = rospy.Time.now()
+        self.publish_sensors(stamp)
+        frame = image_msg(stamp, pad_image())
+        last_sent = [0.0]
+
+        def detected():
+            if time.monotonic() - last_sent[0] > 0.2:
+                self.pub["image"].publish(frame)
+                last_sent[0] = time.monotonic()
+            return any(p.header.stamp == stamp for p in self.points)
+        wait_for(detected, "the pad position of a good frame")
+        return next(p for p in self.points if p.header.stamp == stamp)
+
+    def expect_warning(self, *words):
+        wait_for(lambda: any(all(w in m for w in words) for m in self.warnings), "a warning with %s" % (words,))
+
+    def test_1_good_frame_gives_the_pad_position(self):
+        point = self.detect_once()
+        self.assertEqual(point.header.frame_id, "ardrone/base_link")
+        # 20 px right of the centre = 20/256 * height to the drone's right (-y); straight below otherwise.
+        self.assertAlmostEqual(point.point.x, 0.0, delta=0.01)
+        self.assertAlmostEqual(point.point.y, -20.0 / FX * CAMERA_HEIGHT, delta=0.01)
+        self.assertAlmostEqual(point.point.z, -(CAMERA_HEIGHT + 0.035), delta=0.02)
+
+    def test_2_bad_images_are_dropped_with_a_warning(self):
+        stamp = rospy.Time.now()
+        self.pub["image"].publish(image_msg(stamp, encoding="rgb8", width=0, height=0, step=0, data=b""))
+        self.expect_warning("/ardrone/bottom/image_raw", "does not fit")
+        self.pub["image"].publish(image_msg(stamp, np.zeros((240, 320, 1), np.uint8), encoding="mono8"))
+        self.expect_warning("/ardrone/bottom/image_raw", "mono8")
+        self.pub["image"].publish(image_msg(stamp, pad_image(321, 240)))
+        self.expect_warning("/ardrone/bottom/image_raw", "321x240")
+        self.pub["image"].publish(image_msg(stamp, pad_image(), data=b"\x00" * 100))
+        self.expect_warning("/ardrone/bottom/image_raw", "data size")
+        self.detect_once()
+
+    def test_3_bad_sensor_messages_are_dropped_with_a_warning(self):
+        stamp = rospy.Time.now()
+        self.pub["info"].publish(camera_info(stamp, fx=0.0))
+        self.expect_warning("/ardrone/bottom/camera_info", "focal length")
+        imu = Imu()
+        imu.header.stamp = stamp
+        imu.orientation.w = float("nan")
+        self.pub["imu"].publish(imu)
+        self.expect_warning("/ardrone/imu")
+        self.pub["sonar"].publish(Range(range=float("nan")))
+        self.expect_warning("/ardrone/sonar_height")
+        self.pub["altimeter"].publish(Altimeter(altitude=float("nan")))
+        self.expect_warning("/ardrone/altimeter")
+        odom = Odometry()
+        odom.header.frame_id = "world"
+        odom.pose.pose.position.x = float("nan")
+        self.pub["odom"].publish(odom)
+        self.expect_warning("/ardrone/odom_estimate")
+        # Only the bad ones were dropped: the last good camera_info still serves.
+        self.detect_once()
+
+    def test_4_frame_without_attitude_is_dropped_with_a_warning(self):
+        stamp = rospy.Time.now()
+        self.pub["image"].publish(image_msg(stamp + rospy.Duration(30.0), pad_image()))
+        self.expect_warning("/ardrone/bottom/image_raw", "no /ardrone/imu within")
+
+    def test_5_debug_image_only_for_subscribers(self):
+        debug = []
+        subscriber = rospy.Subscriber("/platform_detection/debug_image", Image, debug.append, queue_size=2)
+        wait_for(lambda: subscriber.get_num_connections() > 0, "the debug image connection")
+        self.detect_once()
+        wait_for(lambda: debug, "a debug image")
+        self.assertEqual((debug[-1].width, debug[-1].height, debug[-1].encoding), (320, 240, "rgb8"))
+        subscriber.unregister()
+
+    def test_6_missing_parameter_stops_the_node_naming_it(self):
+        result = subprocess.run(["rosrun", "uav_vision", "platform_detection", "__name:=unconfigured_detection"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=WALL_TIMEOUT,
+                                env=dict(os.environ))
+        output = result.stdout.decode(errors="replace")
+        self.assertNotEqual(result.returncode, 0, output)
+        self.assertIn("/unconfigured_detection/height_landing_platform", output)
+        self.assertIn("missing", output)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("uav_vision", "node_inputs_rostest", NodeInputsTest)

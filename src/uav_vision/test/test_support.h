@@ -1,0 +1,45 @@
+// Helpers shared by the detector tests: rendered fixtures and synthetic scenes.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "uav_vision/camera_geometry.h"
+#include "uav_vision/pad_detector.h"
+
+namespace uav_vision::test {
+
+// One row of test/data/rendered/truth.csv (written by test/render_fixtures.py).
+struct RenderedFixture {
+  std::string image, band, vehicle;
+  double height_landing_platform = 0, camera_height = 0;
+  CameraIntrinsics intrinsics;
+  Eigen::Vector3d pad_in_body, pad_world_aligned, strip_in_body;  // from base_link [m]
+  Eigen::Quaterniond attitude, imu_attitude;                     // true, and as the IMU reported it
+  double tilt_deg = 0, sonar_range = 0, baro_altitude = 0, visible_pad_share = 0;
+  int visible_pad_corners = 0, strip_corners_in_view = 0;
+};
+
+std::string testDataDir();
+std::vector<RenderedFixture> loadRenderedFixtures();
+cv::Mat loadImageRgb(const std::string& name);  // from test/data/rendered, RGB order
+
+// The simulator's bottom camera intrinsics (320x240, fx = fy = 256).
+CameraIntrinsics simIntrinsics();
+
+Eigen::Quaterniond attitudeFromRpy(double roll, double pitch, double yaw);
+
+// Draws a pad (red square with its green strip) lying on the plane seen by `view`: centre at `offset`
+// from the camera (world-aligned), forward axis at `yaw` in the world; colours in BGR.
+void drawPad(cv::Mat& image, const PlaneView& view, const Eigen::Vector2d& offset, double yaw,
+             double side = 1.0, bool with_strip = true, const cv::Scalar& red_bgr = cv::Scalar(38, 38, 217));
+// A filled polygon given on the plane.
+void drawPlanePolygon(cv::Mat& image, const PlaneView& view, const std::vector<Eigen::Vector2d>& polygon,
+                      const cv::Scalar& colour);
+// Grey checkered ground as in the simulator, BGR.
+cv::Mat groundImage(const CameraIntrinsics& intrinsics);
+
+}  // namespace uav_vision::test
