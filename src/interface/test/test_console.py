@@ -67,5 +67,7 @@ def test_warning_and_emergency_position_are_rendered_with_countdown():
     assert "WARNING: wind gusts -> answer manual/emergency/continue within 10 s" in text
     assert "x=12.34 m, y=-5.50 m" in text
     assert "Emergency Mode" in text and "a Acknowledge" in text
+    model.on_warning({"id": 4, "message": "cold", "options": ["continue"], "deadline": None})
+    assert "WARNING: cold -> the flight goes on" in "\n".join(render_plain(model, 30.0))
     model.on_warning({})
     assert model.warning is None

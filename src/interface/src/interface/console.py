@@ -18,15 +18,22 @@ SENSOR_TOPICS = {"camera": "ardrone/bottom/image_raw", "imu": "ardrone/imu", "od
 SENSOR_TIMEOUT_S = 1.0  # a sensor silent for longer (sim time) is shown as missing
 
 
+def _answer_text(warning, sim_time):
+    """What the operator must do about a warning: answer before its deadline, or nothing (Flag #2)."""
+    options = "/".join(warning.get("options") or [])
+    deadline = warning.get("deadline")
+    if deadline is None:
+        return "the flight goes on" + (" (you may answer %s)" % options if options else "")
+    return "answer %s within %.0f s, else emergency landing" % (options, max(0.0, float(deadline) - sim_time))
+
+
 def render_plain(model, sim_time):
     """The panel as plain text lines (for pipes, logs and tests)."""
     lines = ["== %s ==  t=%.1f s  mode=%s  tracker=%s" % (model.title(), sim_time, model.mode, model.tracker_state)]
     for row in model.rows():
         lines.append("%s %-26s %-28s %s" % ("!" if row.alarm else " ", row.label, row.text, row.note))
     if model.warning:
-        remaining = float(model.warning.get("deadline", sim_time)) - sim_time
-        lines.append("WARNING: %s -> answer %s within %.0f s, else emergency landing" % (
-            model.warning.get("message", ""), "/".join(model.warning.get("options", [])), max(0.0, remaining)))
+        lines.append("WARNING: %s -> %s" % (model.warning.get("message", ""), _answer_text(model.warning, sim_time)))
     if model.emergency_position is not None:
         lines.append("EMERGENCY: drone at x=%.2f m, y=%.2f m (press a to acknowledge)" % model.emergency_position)
     lines.append("actions: " + " | ".join(model.actions()))
@@ -47,10 +54,8 @@ def render_rich(model, sim_time):
         table.add_row(row.label, Text(row.text, style=style), Text(row.note, style="yellow"))
     parts = [table]
     if model.warning:
-        remaining = max(0.0, float(model.warning.get("deadline", sim_time)) - sim_time)
-        parts.append(Panel(Text("%s\nanswer %s within %.0f s, else the drone lands on the ground" % (
-            model.warning.get("message", ""), " / ".join(model.warning.get("options", [])), remaining),
-            style="bold yellow"), title="WARNING"))
+        parts.append(Panel(Text("%s\n%s" % (model.warning.get("message", ""), _answer_text(model.warning, sim_time)),
+                                style="bold yellow"), title="WARNING"))
     if model.emergency_position is not None:
         parts.append(Panel(Text("drone coordinates: x = %.2f m, y = %.2f m" % model.emergency_position,
                                 style="bold red"), title="Emergency Mode"))

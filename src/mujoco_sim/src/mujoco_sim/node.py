@@ -26,6 +26,7 @@ from .simulator import Simulator
 NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF: Navdata.STATE_TAKING_OFF,
                  FlightMode.FLYING: Navdata.STATE_FLYING, FlightMode.LANDING: Navdata.STATE_LANDING,
                  FlightMode.CRASHED: Navdata.STATE_CRASHED}
+_NOTHING = object()
 WHEEL_JOINTS = ["summit_xl_front_left_wheel_joint", "summit_xl_front_right_wheel_joint",
                 "summit_xl_back_left_wheel_joint", "summit_xl_back_right_wheel_joint"]
 # Global condition parameters (thesis names) that change the simulated world, with their checks.
@@ -68,6 +69,7 @@ class SimNode:
         self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
         self.conditions = {}
+        self.rejected = {}  # condition -> the operator's invalid value, left in place and ignored
         self._init_conditions()
         self._init_publishers()
         self._init_subscribers()
@@ -97,8 +99,8 @@ class SimNode:
         try:
             return CONDITION_PARAMS[name].check(raw, "parameter /%s" % name)
         except ConfigError as err:
-            rospy.logwarn("rejected %s; keeping %s. Set it with e.g. 'rosparam set /%s %s'.",
-                          err, fallback, name, fallback)
+            rospy.logwarn("rejected %s; the simulated world keeps %s. Set a valid value with e.g. "
+                          "'rosparam set /%s %s'.", err, fallback, name, fallback)
             return fallback
 
     def _apply_conditions(self):
@@ -281,19 +283,24 @@ class SimNode:
                 continue
             if name == "drone_battery" and raw == self.battery_written:
                 continue  # our own mirror, not an operator's change
+            if raw == self.rejected.get(name, _NOTHING):
+                continue  # already warned; the bad value stays visible to the supervisor (unsafe case)
             if raw != self.conditions[name]:
                 value = self._checked_condition(name, raw, self.conditions[name])
                 if value != self.conditions[name]:
                     rospy.loginfo("condition /%s: %s -> %s", name, self.conditions[name], value)
                     self.conditions[name] = value
                     changed = True
+                    self.rejected.pop(name, None)
                 elif raw != value:
-                    rospy.set_param("/" + name, value)  # put the rejected value back to the valid one
+                    self.rejected[name] = raw
         if changed:
             self._apply_conditions()
         level = round(self.sim.battery.level, 1)
         self.conditions["drone_battery"] = level
-        if level != self.battery_written:
+        # Mirror the level, unless the operator's last value was rejected: overwriting it would hide the
+        # bad input from the supervisor, which must treat an unreadable battery as the unsafe case.
+        if level != self.battery_written and "drone_battery" not in self.rejected:
             rospy.set_param("/drone_battery", level)
             self.battery_written = level
 

@@ -1,0 +1,148 @@
+"""emergency node: thin ROS wrapper of interface.emergency.EmergencyLanding (thesis chapter 3.5).
+
+Engages when supervisor/mode is ``emergency`` (or at once with ``~engage: immediately``, the thesis'
+emergency.launch on its own). Publishes emergency/cmd_vel (forwarded by cmd_vel_mux), ardrone/land,
+emergency/position (landing_msgs/PositionXYCommand, from ardrone/odom_estimate, else ardrone/gps/odom)
+every ``~report_period_s`` until ``ack`` on operator/command, and emergency/state (latched phase).
+"""
+import sys
+import threading
+
+import rospy
+from geometry_msgs.msg import PointStamped, Twist
+from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import Range
+from std_msgs.msg import Empty, String
+
+from .emergency import EmergencyLanding, EmergencySettings, Phase, SettingsError
+from .supervisor_measures import flight_from_navdata
+
+ENGAGE = ("on_mode", "immediately")
+
+
+class EmergencyNode:
+    def __init__(self):
+        private = rospy.get_param("~", {})
+        where = "emergency (%s, config/emergency.yaml)" % rospy.get_name()
+        self.settings = EmergencySettings.from_mapping(private, where)
+        self.engage = private.get("engage", "on_mode")
+        if self.engage not in ENGAGE:
+            raise SettingsError("%s: parameter '~engage' must be one of %s, got %r" % (where, ", ".join(ENGAGE),
+                                                                                        self.engage))
+        self.rate_hz = private.get("rate_hz", 10.0)
+        if isinstance(self.rate_hz, bool) or not isinstance(self.rate_hz, (int, float)) or not 1 <= self.rate_hz <= 100:
+            raise SettingsError("%s: parameter '~rate_hz' must be a number in 1..100, got %r" % (where, self.rate_hz))
+        self.core = EmergencyLanding(self.settings, log=self._log)
+        self.lock = threading.Lock()  # subscriber threads feed the core, the loop steps it
+        self.mode = None
+        self.pending = []  # mode changes and acks, applied in the loop in arrival order
+
+        self.pub_cmd = rospy.Publisher("emergency/cmd_vel", Twist, queue_size=1)
+        self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
+        self.pub_position = rospy.Publisher("emergency/position", PositionXYCommand, queue_size=5)
+        self.pub_state = rospy.Publisher("emergency/state", String, queue_size=1, latch=True)
+        self.pub_state.publish(String(data=Phase.INACTIVE.value))
+        self.state_sent = Phase.INACTIVE
+
+        rospy.Subscriber("supervisor/mode", String, self._locked(lambda m: self.pending.append(("mode", m.data))),
+                         queue_size=5)
+        rospy.Subscriber("operator/command", String, self._locked(self._on_operator), queue_size=10)
+        rospy.Subscriber("ardrone/odom_estimate", Odometry, self._locked(self._estimate("odom_estimate")),
+                         queue_size=1)
+        rospy.Subscriber("ardrone/gps/odom", Odometry, self._locked(self._estimate("gps")), queue_size=1)
+        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped,
+                         self._locked(lambda m: self.core.on_pad(rospy.get_time(), m.point.x, m.point.y)),
+                         queue_size=1)
+        rospy.Subscriber("ardrone/altimeter", Altimeter,
+                         self._locked(lambda m: self.core.on_altitude(rospy.get_time(), m.altitude)), queue_size=1)
+        rospy.Subscriber("ardrone/sonar_height", Range,
+                         self._locked(lambda m: self.core.on_sonar(rospy.get_time(), m.range)), queue_size=1)
+        rospy.Subscriber("ardrone/navdata", Navdata, self._locked(
+            lambda m: self.core.on_flight(rospy.get_time(), flight_from_navdata(m.state))), queue_size=1)
+
+    def _locked(self, callback):
+        def locked(msg):
+            with self.lock:
+                callback(msg)
+        return locked
+
+    @staticmethod
+    def _log(level, text):
+        (rospy.logwarn if level == "warn" else rospy.loginfo)(text)
+
+    def _estimate(self, source):
+        def callback(msg):
+            p = msg.pose.pose.position
+            self.core.on_estimate(rospy.get_time(), source, p.x, p.y)
+        return callback
+
+    def _on_operator(self, msg):
+        if msg.data.strip().lower() == "ack":
+            self.pending.append(("ack", None))
+
+    def _apply_pending(self, t):
+        while self.pending:
+            kind, value = self.pending.pop(0)
+            if kind == "ack":
+                self.core.acknowledge(t)
+            elif value != self.mode:
+                self.mode = value
+                if value == "emergency":
+                    self.core.activate(t, "supervisor mode emergency")
+                elif self.engage == "on_mode":
+                    self.core.deactivate(t, "supervisor mode %s" % value)
+
+    def tick(self):
+        with self.lock:
+            self._tick(rospy.get_time())
+
+    def _tick(self, t):
+        self._apply_pending(t)
+        if self.engage == "immediately" and self.core.phase is Phase.INACTIVE and not self.core.acknowledged:
+            self.core.activate(t, "emergency.launch started on its own")
+        out = self.core.step(t)
+        if out.land:
+            self.pub_land.publish(Empty())
+        if out.cmd is not None:
+            cmd = Twist()
+            cmd.linear.x, cmd.linear.y = out.cmd
+            self.pub_cmd.publish(cmd)
+        if out.report is not None:
+            x, y, source = out.report
+            self.pub_position.publish(PositionXYCommand(x=x, y=y))
+            rospy.loginfo_throttle(5.0, "emergency: drone at x=%.2f m, y=%.2f m (%s); send 'ack' on "
+                                   "operator/command to stop the report" % (x, y, source))
+        elif self.core.phase is not Phase.INACTIVE and not self.core.acknowledged and self.core.position(t) is None:
+            rospy.logwarn_throttle(5.0, "emergency: no position estimate (neither ardrone/odom_estimate nor "
+                                   "ardrone/gps/odom): cannot report the coordinates")
+        if out.phase is not self.state_sent:
+            self.pub_state.publish(String(data=out.phase.value))
+            self.state_sent = out.phase
+
+    def spin(self):
+        rate = rospy.Rate(self.rate_hz)  # sim time
+        while not rospy.is_shutdown():
+            if rospy.get_time() > 0.0:
+                self.tick()
+            try:
+                rate.sleep()
+            except rospy.ROSTimeMovedBackwardsException:
+                pass
+            except rospy.ROSInterruptException:
+                break
+
+
+def main():
+    rospy.init_node("emergency")
+    try:
+        node = EmergencyNode()
+    except SettingsError as err:
+        rospy.logfatal(str(err))
+        return 2
+    node.spin()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,233 @@
+"""supervisor node: thin ROS wrapper of interface.supervisor.Supervisor.
+
+In:  the condition parameters (/wind_speed, /drone_battery, ... via rospy.get_param_cached, pushed by the
+     master), sensor watchdogs (ardrone/bottom/image_raw, ardrone/imu, ardrone/gps/odom,
+     ardrone/sonar_height), platform speed (kalman_platform_odom, else summit_xl/gps/odom), the
+     tracker's state (platform_tracking/state), the drone's state (ardrone/navdata), operator/command
+     and the Trigger services supervisor/{landing,emergency,manual,continue}.
+Out: supervisor/decisions (JSON per decision), supervisor/mode, supervisor/warning, landing_allowed
+     (latched) and platform_tracking/command (the hand-over to the tracker).
+Everything runs in sim time.
+"""
+import json
+import sys
+import threading
+
+import rospy
+from landing_msgs.msg import Navdata
+from nav_msgs.msg import Odometry
+from std_msgs.msg import Bool, String
+from std_srvs.srv import Trigger, TriggerResponse
+
+from .conditions import MISSING, ConditionTableError, load_table
+from .supervisor import Flight, Settings, SettingsError, Supervisor
+from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, flight_from_navdata
+
+SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/image_raw", "imu_silence_s": "ardrone/imu",
+                 "odometry_silence_s": "ardrone/gps/odom", "sonar_silence_s": "ardrone/sonar_height"}
+SERVICES = ("landing", "emergency", "manual", "continue")
+NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
+    "rate_hz": (5.0, 200.0),
+    "platform_odom_timeout_s": (0.05, 60.0),
+    "platform_speed_window_s": (0.1, 60.0),
+    "navdata_timeout_s": (0.05, 60.0),
+    "warning_repeat_s": (0.5, 3600.0),
+}
+
+
+class StartupError(RuntimeError):
+    pass
+
+
+def _node_params():
+    """Private parameters (config/supervisor.yaml); StartupError names a missing or bad one."""
+    private = rospy.get_param("~", {})
+    where = "supervisor (%s, config/supervisor.yaml)" % rospy.get_name()
+    if "conditions_file" not in private:
+        raise StartupError("%s: required parameter '~conditions_file' (path of config/conditions.yaml) is missing"
+                           % where)
+    if not isinstance(private.get("target_lost_state"), str):
+        raise StartupError("%s: required parameter '~target_lost_state' (the tracker's state meaning the pad is "
+                           "lost, e.g. RELOCATING) is missing or not a text" % where)
+    initial = private.get("initial_conditions", None)
+    if not isinstance(initial, dict) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in initial.values()):
+        raise StartupError("%s: required parameter '~initial_conditions' must map condition parameters to "
+                           "numbers, got %r" % (where, initial))
+    values = {"initial_conditions": initial}
+    for name, (low, high) in NODE_PARAMS.items():
+        if name not in private:
+            raise StartupError("%s: required parameter '~%s' is missing" % (where, name))
+        value = private[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+            raise StartupError("%s: parameter '~%s' must be a number in %g..%g, got %r"
+                               % (where, name, low, high, value))
+        values[name] = float(value)
+    try:
+        settings = Settings.from_mapping(private, where)
+    except SettingsError as err:
+        raise StartupError(str(err))
+    return private["conditions_file"], private["target_lost_state"], settings, values
+
+
+class SupervisorNode:
+    def __init__(self):
+        conditions_file, lost_state, settings, self.params = _node_params()
+        try:
+            self.table = load_table(conditions_file)
+        except ConditionTableError as err:
+            raise StartupError("supervisor: %s" % err)
+        self.lock = threading.Lock()
+        self.core = Supervisor(self.table, settings, log=self._log)
+        self.watchdog = SensorWatchdog(SENSOR_TOPICS)
+        self.platform = PlatformSpeed(self.params["platform_odom_timeout_s"], self.params["platform_speed_window_s"])
+        self.target = TargetLostTimer(lost_state)
+        self.navdata = None  # (receipt time, state)
+        self.published = {"mode": None, "warning": None, "landing_allowed": None}
+        self.last_warning_sent = -1e9
+
+        self.pub_decisions = rospy.Publisher("supervisor/decisions", String, queue_size=100)
+        self.pub_mode = rospy.Publisher("supervisor/mode", String, queue_size=1, latch=True)
+        self.pub_warning = rospy.Publisher("supervisor/warning", String, queue_size=1, latch=True)
+        self.pub_allowed = rospy.Publisher("landing_allowed", Bool, queue_size=1, latch=True)
+        self.pub_tracker = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
+
+        for name, topic in SENSOR_TOPICS.items():
+            # AnyMsg: only the arrival matters, nothing is deserialised (the camera is 230 kB a frame).
+            rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1, buff_size=2 ** 20)
+        rospy.Subscriber("kalman_platform_odom", Odometry, self._on_platform_odom, queue_size=1)
+        rospy.Subscriber("summit_xl/gps/odom", Odometry, self._on_vehicle_gps, queue_size=5)
+        rospy.Subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
+        rospy.Subscriber("ardrone/navdata", Navdata, self._on_navdata, queue_size=1)
+        rospy.Subscriber("operator/command", String, self._on_operator, queue_size=10)
+        self.services = [rospy.Service("supervisor/" + name, Trigger, self._service(name)) for name in SERVICES]
+        for name, value in self.params["initial_conditions"].items():
+            if not rospy.has_param("/" + name):
+                rospy.set_param("/" + name, value)
+                rospy.loginfo("supervisor: /%s was not set: starting from %g (thesis Flight Management default)",
+                              name, value)
+        # Subscribe to every condition parameter now, so the master pushes changes from here on.
+        for name in self.table.params():
+            self._read_param(name)
+        self._publish(0.0)  # mode idle, no warning, landing not allowed: known before the clock runs
+        rospy.loginfo("supervisor: %d conditions from %s; answer timeout %g s, auto take-off after %g s, "
+                      "Flag #3 re-checks every %g s x %d", len(self.table), conditions_file,
+                      settings.answer_timeout_s, settings.idle_takeoff_s, settings.recheck_interval_s,
+                      settings.recheck_count)
+
+    @staticmethod
+    def _log(level, text):
+        {"info": rospy.loginfo, "warn": rospy.logwarn, "error": rospy.logerr}[level](text)
+
+    # ----- inputs ------------------------------------------------------------------------------------
+    def _seen(self, name):
+        def callback(_):
+            self.watchdog.seen(name, rospy.get_time())
+        return callback
+
+    def _on_platform_odom(self, msg):
+        v = msg.twist.twist.linear
+        with self.lock:
+            self.platform.on_filtered(rospy.get_time(), v.x, v.y)
+
+    def _on_vehicle_gps(self, msg):
+        v = msg.twist.twist.linear
+        with self.lock:
+            self.platform.on_gps(rospy.get_time(), v.x, v.y)
+
+    def _on_tracker_state(self, msg):
+        with self.lock:
+            self.target.on_state(rospy.get_time(), msg.data)
+
+    def _on_navdata(self, msg):
+        self.navdata = (rospy.get_time(), msg.state)
+
+    def _on_operator(self, msg):
+        self._command(msg.data)
+
+    def _service(self, name):
+        def handle(_request):
+            accepted, message = self._command(name)
+            return TriggerResponse(success=accepted, message=message)
+        return handle
+
+    def _command(self, word):
+        with self.lock:
+            accepted, message = self.core.command(rospy.get_time(), word)
+            self._publish()
+        return accepted, message
+
+    @staticmethod
+    def _read_param(name):
+        try:
+            return rospy.get_param_cached("/" + name)  # pushed by the master: no XML-RPC round trip per poll
+        except KeyError:
+            return MISSING
+
+    def _readings(self, t):
+        readings = {name: self._read_param(name) for name in self.table.params()}
+        readings["platform_speed"] = self.platform.value(t)
+        readings["target_lost_s"] = self.target.value(t)
+        for name in SENSOR_TOPICS:
+            readings[name] = self.watchdog.silence(name, t)
+        return readings
+
+    def _flight(self, t):
+        if self.navdata is None or t - self.navdata[0] > self.params["navdata_timeout_s"]:
+            return Flight.UNKNOWN
+        return flight_from_navdata(self.navdata[1])
+
+    # ----- outputs -----------------------------------------------------------------------------------
+    def _publish(self, t=None):
+        decisions, tracker_commands = self.core.take_outputs()
+        for decision in decisions:
+            self.pub_decisions.publish(String(data=json.dumps(decision.as_dict())))
+        for command in tracker_commands:
+            self.pub_tracker.publish(String(data=command))
+        mode = self.core.mode.value
+        if mode != self.published["mode"]:
+            self.pub_mode.publish(String(data=mode))
+            self.published["mode"] = mode
+        warning = json.dumps(self.core.warning, sort_keys=True)
+        now = rospy.get_time() if t is None else t
+        repeat = self.core.warning and now - self.last_warning_sent >= self.params["warning_repeat_s"]
+        if warning != self.published["warning"] or repeat:
+            # A pending warning is sent again every warning_repeat_s (thesis: keep sending the message).
+            self.pub_warning.publish(String(data=warning))
+            self.published["warning"], self.last_warning_sent = warning, now
+        if self.core.landing_allowed != self.published["landing_allowed"]:
+            self.pub_allowed.publish(Bool(data=self.core.landing_allowed))
+            self.published["landing_allowed"] = self.core.landing_allowed
+
+    def tick(self):
+        t = rospy.get_time()
+        with self.lock:
+            self.core.tick(t, self._readings(t), self._flight(t))
+            self._publish(t)
+
+    def spin(self):
+        rate = rospy.Rate(self.params["rate_hz"])  # sim time
+        while not rospy.is_shutdown():
+            if rospy.get_time() > 0.0:  # the clock runs (a scenario may hold the physics at first)
+                self.tick()
+            try:
+                rate.sleep()
+            except rospy.ROSTimeMovedBackwardsException:
+                rospy.logwarn("supervisor: sim time moved backwards; carrying on")
+            except rospy.ROSInterruptException:
+                break
+
+
+def main():
+    rospy.init_node("supervisor")
+    try:
+        node = SupervisorNode()
+    except StartupError as err:
+        rospy.logfatal(str(err))
+        return 2
+    node.spin()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,398 @@
+"""Decision library of the supervisor (ROS-free): flags, re-checks, go/no-go, warnings, take-off, bad values."""
+import json
+import math
+import os
+import sys
+
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "src"))
+from interface.conditions import MISSING, load_table  # noqa: E402
+from interface.supervisor import Flight, Mode, Settings, SettingsError, Supervisor  # noqa: E402
+
+TABLE_PATH = os.path.join(HERE, "..", "config", "conditions.yaml")
+# Thesis Flight Management defaults (Appendix 3) plus healthy measurements: nothing adverse.
+NOMINAL = {"wind_speed": 0.6, "drone_speed": 8, "control_battery": 50, "drone_battery": 80, "temp": 15,
+           "platform_speed": 1.0, "target_lost_s": 0.0, "camera_silence_s": 0.03, "imu_silence_s": 0.01,
+           "odometry_silence_s": 0.2, "sonar_silence_s": 0.04}
+SETTINGS = Settings(answer_timeout_s=15.0, idle_takeoff_s=30.0, recheck_interval_s=2.0, recheck_count=3)
+
+
+class Harness:
+    """A supervisor with the shipped table, driven at 10 Hz like the node."""
+
+    def __init__(self, settings=SETTINGS):
+        self.log = []
+        self.sup = Supervisor(load_table(TABLE_PATH), settings, log=lambda level, text: self.log.append(text))
+        self.readings = dict(NOMINAL)
+        self.flight = Flight.LANDED
+        self.t = 0.0
+        self.decisions, self.tracker = [], []
+
+    def collect(self):
+        decisions, commands = self.sup.take_outputs()
+        self.decisions += [d.as_dict() for d in decisions]
+        self.tracker += commands
+        return [d.as_dict() for d in decisions]
+
+    def tick(self, **changes):
+        self.readings.update(changes)
+        self.sup.tick(self.t, self.readings, self.flight)
+        return self.collect()
+
+    def run(self, seconds, **changes):
+        """Advance ``seconds`` of sim time at 10 Hz; returns the decisions made meanwhile."""
+        self.readings.update(changes)
+        out = []
+        end = self.t + seconds
+        while self.t < end - 1e-9:
+            self.t = round(self.t + 0.1, 6)
+            out += self.tick()
+        return out
+
+    def command(self, word):
+        result = self.sup.command(self.t, word)
+        self.collect()
+        return result
+
+    def airborne_mission(self):
+        """Start the landing mission and climb: mode landing, airborne."""
+        self.tick()
+        assert self.command("landing")[0]
+        self.flight = Flight.AIRBORNE
+        self.run(1.0)
+        assert self.sup.mode is Mode.LANDING
+        self.decisions.clear()
+        self.tracker.clear()
+        return self
+
+
+def actions(decisions, condition=None):
+    return [d["action"] for d in decisions if condition is None or d["condition"] == condition]
+
+
+@pytest.fixture
+def h():
+    return Harness()
+
+
+@pytest.fixture
+def flying():
+    return Harness().airborne_mission()
+
+
+# ----- decision records -----------------------------------------------------------------------------
+def test_every_decision_is_a_complete_json_record(flying):
+    flying.run(0.5, drone_battery=float("nan"))
+    assert flying.decisions
+    for decision in flying.decisions:
+        assert set(decision) == {"t", "condition", "flag", "action", "reason", "value"}
+        json.loads(json.dumps(decision, allow_nan=False))  # strict JSON: no bare NaN
+
+
+def test_mode_changes_are_logged_as_a_to_b_with_reason(h):
+    h.tick()
+    h.command("landing")
+    assert "supervisor mode: idle -> landing (operator: landing)" in h.log
+    h.command("manual")
+    assert "supervisor mode: landing -> manual (operator: manual)" in h.log
+
+
+# ----- Flag #1 ---------------------------------------------------------------------------------------
+def test_flag1_battery_10_percent_starts_the_emergency_landing_in_the_same_tick(flying):
+    decisions = flying.tick(drone_battery=10)
+    assert flying.sup.mode is Mode.EMERGENCY
+    first = decisions[0]
+    assert (first["condition"], first["flag"], first["action"]) == ("drone_battery_critical", 1, "emergency_landing")
+    assert first["t"] == flying.t and first["value"] == 10.0
+    assert flying.tracker == ["hold"]
+    assert flying.sup.landing_allowed is False
+
+
+def test_flag1_critical_wind_12_mps(flying):
+    flying.tick(wind_speed=12.0)
+    assert flying.sup.mode is Mode.EMERGENCY
+    assert ("wind_critical", "emergency_landing") in [(d["condition"], d["action"]) for d in flying.decisions]
+
+
+def test_flag1_also_ends_manual_control(flying):
+    flying.command("manual")
+    flying.tick(drone_battery=9.0)
+    assert flying.sup.mode is Mode.EMERGENCY
+
+
+def test_flag1_on_the_pad_refuses_the_take_off_instead(h):
+    h.tick(drone_battery=10)
+    assert h.sup.mode is Mode.IDLE
+    assert "no_go" in actions(h.decisions, "drone_battery_critical")
+    accepted, message = h.command("landing")
+    assert not accepted and "battery" in message and h.sup.mode is Mode.IDLE
+
+
+def test_flag1_while_hovering_without_a_mission_lands(h):
+    h.flight = Flight.AIRBORNE   # a scenario may start the drone in the air
+    h.tick()
+    h.tick(drone_battery=10)
+    assert h.sup.mode is Mode.EMERGENCY
+
+
+# ----- Flag #2 ---------------------------------------------------------------------------------------
+def test_flag2_warns_and_the_flight_goes_on(flying):
+    flying.tick(temp=0.0)
+    assert actions(flying.decisions, "temp_cold") == ["warn"]
+    warning = flying.sup.warning
+    assert warning["conditions"] == ["temp_cold"] and warning["deadline"] is None
+    assert warning["options"] == ["manual", "emergency", "continue"] and warning["default"] == "continue"
+    flying.run(60.0)
+    assert flying.sup.mode is Mode.LANDING and flying.sup.landing_allowed
+    assert "emergency_landing" not in actions(flying.decisions)
+
+
+# ----- Flag #3 ---------------------------------------------------------------------------------------
+def test_flag3_three_rechecks_then_emergency_landing(flying):
+    start = flying.t
+    flying.run(0.1, wind_speed=9.0)
+    wind = [d for d in flying.decisions if d["condition"] == "wind_strong"]
+    assert [d["action"] for d in wind] == ["recheck"] and wind[0]["flag"] == 3
+    flying.run(5.85)
+    wind = [d for d in flying.decisions if d["condition"] == "wind_strong"]
+    assert [d["action"] for d in wind] == ["recheck", "recheck", "recheck"]  # detection, checks 1/3 and 2/3
+    assert flying.sup.mode is Mode.LANDING
+    flying.run(0.2)
+    wind = [d for d in flying.decisions if d["condition"] == "wind_strong"]
+    assert wind[-1]["action"] == "emergency_landing" and "3 re-checks" in wind[-1]["reason"]
+    assert wind[-1]["t"] == pytest.approx(start + 0.1 + 6.0, abs=0.11)
+    assert flying.sup.mode is Mode.EMERGENCY
+
+
+def test_flag3_cleared_before_the_third_check_goes_on(flying):
+    flying.run(0.1, wind_speed=9.0)
+    flying.run(4.5)                       # re-checks 1 and 2 found it
+    decisions = flying.run(0.1, wind_speed=3.0)
+    assert actions(decisions, "wind_strong") == ["continue"]
+    assert "cleared after 2 of 3 re-checks" in decisions[0]["reason"]
+    flying.run(30.0)
+    assert flying.sup.mode is Mode.LANDING and flying.sup.landing_allowed
+
+
+def test_flag3_recheck_interval_and_count_are_settings():
+    h = Harness(Settings(answer_timeout_s=100.0, idle_takeoff_s=30.0, recheck_interval_s=0.5, recheck_count=5))
+    h.airborne_mission()
+    h.run(0.1, camera_silence_s=3.0)
+    h.run(2.3)
+    assert h.sup.mode is Mode.LANDING
+    assert actions(h.decisions, "camera_missing") == ["recheck"] * 5  # detection + re-checks 1..4 of 5
+    h.run(0.3)
+    assert h.sup.mode is Mode.EMERGENCY
+    final = [d for d in h.decisions if d["condition"] == "camera_missing"][-1]
+    assert final["action"] == "emergency_landing" and "5 re-checks" in final["reason"]
+
+
+# ----- go / no-go with reasons -------------------------------------------------------------------------
+@pytest.mark.parametrize("change, row, reason_text", [
+    ({"wind_speed": 9.0}, "wind_strong", "weather"),
+    ({"platform_speed": 13.0}, "platform_too_fast", "platform too fast for the drone"),
+    ({"target_lost_s": 6.0}, "target_lost", "target lost"),
+    ({"drone_battery": 39.0}, "drone_battery_landing", "battery"),
+    ({"camera_silence_s": 1.5}, "camera_missing", "sensor missing"),
+    ({"imu_silence_s": 1.5}, "imu_missing", "sensor missing"),
+    ({"odometry_silence_s": 1.5}, "odometry_missing", "sensor missing"),
+    ({"sonar_silence_s": 1.5}, "sonar_missing", "sensor missing"),
+])
+def test_no_go_during_the_landing_says_why_and_go_when_it_clears(flying, change, row, reason_text):
+    assert flying.sup.landing_allowed
+    flying.tick(**change)
+    assert not flying.sup.landing_allowed
+    landing = [d for d in flying.decisions if d["condition"] == "landing"]
+    assert landing[-1]["action"] == "no_go"
+    assert landing[-1]["reason"].startswith("landing on the pad not possible: %s: %s" % (reason_text, row))
+    assert landing[-1]["value"] == [row]
+    flying.tick(**{key: NOMINAL[key] for key in change})
+    assert flying.sup.landing_allowed and flying.decisions[-1]["action"] == "go"
+
+
+def test_no_go_before_the_take_off_says_why(h):
+    h.tick(platform_speed=15.0)
+    accepted, message = h.command("landing")
+    assert not accepted and h.sup.mode is Mode.IDLE
+    assert message == "take-off refused: platform too fast for the drone: platform_too_fast " \
+                      "(platform_speed 15 m/s > 12 m/s)"
+    assert h.decisions[-1]["action"] == "no_go" and h.decisions[-1]["condition"] == "takeoff"
+
+
+def test_landing_is_only_allowed_in_the_landing_mission(h):
+    h.tick()
+    assert not h.sup.landing_allowed
+    h.command("landing")
+    assert h.sup.landing_allowed
+    h.command("manual")
+    assert not h.sup.landing_allowed
+
+
+def test_battery_40_percent_is_enough_for_the_landing(flying):
+    flying.tick(drone_battery=40.0)
+    assert flying.sup.landing_allowed
+    flying.tick(drone_battery=39.9)
+    assert not flying.sup.landing_allowed
+
+
+# ----- the warning the operator answers -----------------------------------------------------------------
+def test_unanswered_no_go_warning_lands_on_the_ground_after_the_answer_timeout(flying):
+    start = flying.t + 0.1
+    flying.run(0.1, platform_speed=14.0)
+    warning = flying.sup.warning
+    assert warning["deadline"] == pytest.approx(start + 15.0) and warning["default"] == "emergency"
+    flying.run(14.8)
+    assert flying.sup.mode is Mode.LANDING
+    flying.run(0.2)
+    assert flying.sup.mode is Mode.EMERGENCY
+    final = [d for d in flying.decisions if d["action"] == "emergency_landing"]
+    assert len(final) == 1 and final[0]["condition"] == "platform_too_fast"
+    assert "no answer to the warning within 15 s" in final[0]["reason"]
+    assert flying.sup.warning == {}
+
+
+def test_answer_continue_keeps_flying_but_not_landing(flying):
+    flying.run(0.1, target_lost_s=6.0)
+    accepted, message = flying.command("continue")
+    assert accepted and "landing on the pad stays no-go" in message
+    assert flying.sup.warning == {}
+    flying.run(30.0)
+    assert flying.sup.mode is Mode.LANDING and not flying.sup.landing_allowed
+    flying.run(0.1, target_lost_s=0.0)
+    assert flying.sup.landing_allowed
+
+
+@pytest.mark.parametrize("answer, mode", [("manual", Mode.MANUAL), ("emergency", Mode.EMERGENCY)])
+def test_answer_manual_or_emergency(flying, answer, mode):
+    flying.run(0.1, drone_battery=35.0)
+    flying.command(answer)
+    assert flying.sup.mode is mode
+    assert flying.tracker[-1] == "hold"
+    flying.run(30.0)
+    assert flying.sup.mode is mode  # the answered warning has no deadline any more
+
+
+def test_continue_after_an_emergency_does_not_bounce_back(flying):
+    flying.tick(drone_battery=10)
+    assert flying.sup.mode is Mode.EMERGENCY
+    flying.command("continue")
+    assert flying.sup.mode is Mode.LANDING and flying.tracker[-1] == "takeoff"
+    flying.run(5.0)
+    assert flying.sup.mode is Mode.LANDING
+    flying.run(0.1, drone_battery=50)   # cleared ...
+    flying.run(0.1, drone_battery=8)    # ... and back: a new occurrence
+    assert flying.sup.mode is Mode.EMERGENCY
+
+
+# ----- auto take-off --------------------------------------------------------------------------------------
+def test_auto_take_off_after_30_s_without_a_choice(h):
+    h.tick()
+    h.run(29.8)
+    assert h.sup.mode is Mode.IDLE and h.tracker == []
+    h.run(0.3)
+    assert h.sup.mode is Mode.LANDING and h.tracker == ["takeoff"]
+    assert [d for d in h.decisions if d["condition"] == "idle"][0]["action"] == "takeoff"
+
+
+def test_a_choice_cancels_the_auto_take_off(h):
+    h.tick()
+    h.run(5.0)
+    h.command("manual")
+    h.run(60.0)
+    assert h.sup.mode is Mode.MANUAL and "takeoff" not in h.tracker
+
+
+def test_auto_take_off_waits_while_no_go(h):
+    h.tick(drone_battery=30.0)
+    h.run(31.0)
+    assert h.sup.mode is Mode.IDLE
+    assert [d["action"] for d in h.decisions if d["condition"] == "takeoff"] == ["no_go"]  # said once
+    h.run(0.2, drone_battery=60.0)
+    assert h.sup.mode is Mode.LANDING
+
+
+# ----- unreadable values are unsafe ---------------------------------------------------------------------------
+@pytest.mark.parametrize("raw, says", [
+    ("abc", "'abc', not a number"), (float("nan"), "not a finite number"), (-5, "impossible (valid 0..100)"),
+    (150, "impossible (valid 0..100)"), (MISSING, "is not set"), ({}, "is not set"), (True, "not a number"),
+])
+def test_unreadable_battery_is_treated_as_critical(flying, raw, says):
+    flying.tick(drone_battery=raw)
+    assert flying.sup.mode is Mode.EMERGENCY
+    first = flying.decisions[0]
+    assert first["condition"] == "drone_battery_critical" and first["action"] == "emergency_landing"
+    assert "parameter /drone_battery" in first["reason"] and says in first["reason"]
+    assert "treated as unsafe" in first["reason"] and "rosparam set /drone_battery" in first["reason"]
+    json.dumps(first, allow_nan=False)
+
+
+@pytest.mark.parametrize("param", ["wind_speed", "temp", "control_battery"])
+def test_any_unreadable_flag1_parameter_lands(flying, param):
+    flying.tick(**{param: "abc"})
+    assert flying.sup.mode is Mode.EMERGENCY
+
+
+def test_unreadable_value_on_the_pad_is_a_no_go(h):
+    h.tick(drone_battery="abc")
+    assert not h.command("landing")[0]
+    assert any("treated as unsafe" in d["reason"] for d in h.decisions if d["action"] == "no_go")
+
+
+def test_unreadable_value_of_a_present_condition_is_still_reported(flying):
+    flying.command("manual")
+    flying.tick(temp=0.0)
+    flying.tick(temp="cold")
+    reasons = [d["reason"] for d in flying.decisions if d["condition"] == "temp_cold"]
+    assert any("'cold', not a number" in r for r in reasons)
+
+
+# ----- operator, flight state -------------------------------------------------------------------------------
+def test_unknown_command_is_ignored_with_a_clear_message(h):
+    accepted, message = h.command("fly away")
+    assert not accepted and "expected one of landing, takeoff" in message
+    assert h.decisions[-1]["action"] == "ignored"
+
+
+def test_landing_mission_ends_landed_after_touchdown(flying):
+    flying.flight = Flight.LANDED
+    flying.tick()
+    assert flying.sup.mode is Mode.LANDED and "landed" in actions(flying.decisions)
+
+
+def test_emergency_report_acknowledged_on_the_ground_ends_landed(flying):
+    flying.command("emergency")
+    flying.run(1.0)
+    flying.flight = Flight.LANDED
+    flying.run(1.0)
+    assert flying.sup.mode is Mode.EMERGENCY  # still reporting until the operator acknowledges
+    assert flying.command("ack")[0]
+    assert flying.sup.mode is Mode.LANDED
+
+
+def test_quit_in_the_air_lands_where_it_is(flying):
+    flying.command("quit")
+    assert flying.sup.mode is Mode.QUIT and flying.tracker[-1] == "force_land"
+    assert not flying.command("landing")[0]
+
+
+def test_manual_and_back_to_the_landing_mission(flying):
+    flying.command("manual")
+    assert flying.sup.mode is Mode.MANUAL and flying.tracker[-1] == "hold"
+    flying.command("landing")
+    assert flying.sup.mode is Mode.LANDING and flying.tracker[-1] == "takeoff"
+
+
+# ----- settings --------------------------------------------------------------------------------------------
+def test_settings_name_a_missing_or_bad_key():
+    good = {"answer_timeout_s": 15.0, "idle_takeoff_s": 30.0, "recheck_interval_s": 2.0, "recheck_count": 3}
+    assert Settings.from_mapping(good).recheck_count == 3
+    with pytest.raises(SettingsError, match="'idle_takeoff_s' is missing"):
+        Settings.from_mapping({k: v for k, v in good.items() if k != "idle_takeoff_s"})
+    with pytest.raises(SettingsError, match="'recheck_count' must be an integer"):
+        Settings.from_mapping(dict(good, recheck_count=2.5))
+    with pytest.raises(SettingsError, match="'answer_timeout_s' = -1 is outside"):
+        Settings.from_mapping(dict(good, answer_timeout_s=-1))
+    with pytest.raises(SettingsError, match="'answer_timeout_s' must be a number"):
+        Settings.from_mapping(dict(good, answer_timeout_s=math.nan))
