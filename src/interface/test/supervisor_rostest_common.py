@@ -20,6 +20,9 @@ REACTION_LIMIT = 1.0   # a condition change must be acted on within this [sim s]
 AIRBORNE = (Navdata.STATE_FLYING, Navdata.STATE_HOVERING, Navdata.STATE_TAKING_OFF, Navdata.STATE_LANDING)
 
 
+CLOCK_SKEW_S = 0.05  # two /clock periods [s]
+
+
 class Harness:
     def __init__(self, name):
         rospy.init_node(name)
@@ -96,6 +99,8 @@ class Harness:
         self.wait_for(done, "%.1f s of sim time" % seconds)
 
     def decision(self, condition=None, action=None, after=0.0):
+        # Each node receives /clock on its own; the supervisor's stamp may trail ours by a tick or two.
+        after -= CLOCK_SKEW_S
         with self.lock:
             for d in self.decisions:
                 if d["t"] >= after and (condition is None or d["condition"] == condition) and \

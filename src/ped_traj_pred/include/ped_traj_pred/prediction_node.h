@@ -1,0 +1,61 @@
+// ROS wrapper of PadMotionFilter: detections in, predicted path and filtered odometry out.
+//
+// Subscribes (relative names, from parameters):
+//   pose_topic  geometry_msgs/PointStamped  pad centre detections in world_frame
+//   gps_topic   nav_msgs/Odometry           vehicle GPS fix (optional; empty name disables it)
+// Publishes at pub_freq [Hz] in ROS (sim) time while the track is alive:
+//   future_path_topic  nav_msgs/Path      pad positions at now + k*time_step, k = 0..path_time/time_step
+//   odom_topic         nav_msgs/Odometry  filtered pad position and world-frame velocity, with covariances
+// Nothing is published while there is no track or it is lost; consumers detect that from the stamps.
+#pragma once
+
+#include "ped_traj_pred/pad_motion_filter.h"
+
+#include <geometry_msgs/PointStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace ped_traj_pred
+{
+/// A parameter is missing or invalid; the message names it.
+class ParameterError : public std::runtime_error
+{
+public:
+  using std::runtime_error::runtime_error;
+};
+
+class PredictionNode
+{
+public:
+  /// Reads the parameters from `private_nh` and wires the topics relative to `nh`.
+  /// Throws ParameterError naming the first missing or invalid parameter.
+  PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh);
+
+private:
+  void onDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
+  void onGps(const nav_msgs::Odometry::ConstPtr& msg);
+  void onTimer(const ros::TimerEvent& event);
+  /// The message's stamp, or now when it is zero (a publisher that does not stamp).
+  ros::Time stampOf(const std_msgs::Header& header) const;
+  void logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp);
+  void publish(const ros::Time& now, const PadState& state);
+
+  // Parameters.
+  std::string world_frame_;
+  double time_step_;             // [s]
+  double path_time_;             // [s]
+  double pub_freq_;              // [Hz]
+  Eigen::Vector2d gps_pad_offset_;  // pad centre in the vehicle frame relative to the GPS point [m]
+
+  PadMotionFilter filter_;
+  ros::Subscriber detection_sub_, gps_sub_;
+  ros::Publisher path_pub_, odom_pub_;
+  ros::Timer timer_;
+  bool tracking_ = false;     // as of the last timer tick, for logging the transitions once
+  ros::Time last_tick_;
+};
+
+}  // namespace ped_traj_pred

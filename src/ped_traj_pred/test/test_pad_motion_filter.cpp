@@ -1,0 +1,413 @@
+// Unit tests of the ROS-free pad filter on synthetic trajectories with seeded noise.
+// Unless a test says otherwise: vision at 30 Hz, 3 cm noise per axis, default (tuned) parameters, and
+// the error statistic is over the 1 s-ahead predicted position (3-D distance to the true position 1 s
+// later), at every frame after the first 3 s.
+#include "ped_traj_pred/pad_motion_filter.h"
+#include "ped_traj_pred/prediction_evaluation.h"
+#include "ped_traj_pred/synthetic_trajectory.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+
+namespace ped_traj_pred
+{
+namespace
+{
+constexpr double kCameraRate = 30.0;  // [Hz]
+
+TrajectorySpec makePath(PathKind kind, double speed, double radius = 10.0, double max_acceleration = 1.0,
+                        double max_yaw_acceleration = 3.0, double duration = 40.0)
+{
+  TrajectorySpec spec;
+  spec.kind = kind;
+  spec.speed = speed;
+  spec.radius = radius;
+  spec.max_acceleration = max_acceleration;
+  spec.max_yaw_acceleration = max_yaw_acceleration;
+  spec.duration = duration;
+  return spec;
+}
+
+EvaluationResult run(const TrajectorySpec& spec, const MeasurementSpec& measurements = {},
+                     const FilterParameters& parameters = {})
+{
+  return evaluatePrediction(SyntheticTrajectory(spec, kCameraRate), measurements, parameters);
+}
+
+void print(const char* name, const EvaluationResult& result)
+{
+  const ErrorStatistics& s = result.statistics;
+  std::printf("[ stats    ] %-28s 1 s-ahead error: median %.3f  p95 %.3f  max %.3f m  (%d scored, %d rejected)\n",
+              name, s.median, s.p95, s.max, s.count, result.rejected);
+}
+
+/// Feeds noise-free vision fixes of a pad standing still at `position` from t0 to t1 at 30 Hz.
+void feedStationary(PadMotionFilter& filter, const Eigen::Vector3d& position, double t0, double t1)
+{
+  for (double t = t0; t <= t1 + 1e-9; t += 1.0 / kCameraRate)
+    filter.addVision(t, position);
+}
+}  // namespace
+
+// The acceptance target: 10 m circle at 3 m/s, 95th percentile of the 1 s-ahead error < 20 cm.
+TEST(PredictionAccuracy, CircleRadius10At3mpsMeetsTheTwentyCentimetreTarget)
+{
+  for (unsigned seed = 1; seed <= 5; ++seed)
+  {
+    MeasurementSpec measurements;
+    measurements.seed = seed;
+    const EvaluationResult result = run(makePath(PathKind::kCircle, 3.0, 10.0, 1.0, 3.0, 60.0), measurements);
+    print(("circle r10 3 m/s seed " + std::to_string(seed)).c_str(), result);
+    EXPECT_GT(result.statistics.count, 1500);
+    EXPECT_EQ(result.untracked_ticks, 0);
+    EXPECT_LT(result.statistics.p95, 0.20) << "seed " << seed;
+    // Regression guard well inside the target (measured about 0.06 m).
+    EXPECT_LT(result.statistics.p95, 0.10) << "seed " << seed;
+  }
+}
+
+TEST(PredictionAccuracy, StraightLine)
+{
+  const EvaluationResult result = run(makePath(PathKind::kStraight, 3.0));
+  print("straight 3 m/s", result);
+  EXPECT_LT(result.statistics.p95, 0.10);
+}
+
+TEST(PredictionAccuracy, CircleAtSeveralSpeedsAndRadii)
+{
+  for (const auto& [speed, radius] : { std::pair{ 0.5, 10.0 }, { 1.0, 10.0 }, { 5.0, 10.0 }, { 3.0, 5.0 } })
+  {
+    const EvaluationResult result = run(makePath(PathKind::kCircle, speed, radius));
+    print(("circle r" + std::to_string(int(radius)) + " " + std::to_string(speed).substr(0, 3) + " m/s").c_str(),
+          result);
+    EXPECT_LT(result.statistics.p95, 0.15) << speed << " m/s on a " << radius << " m circle";
+  }
+}
+
+TEST(PredictionAccuracy, Acceleration)
+{
+  // 1 m/s <-> 10 m/s at 2 m/s^2. During a ramp's first second the prediction cannot know the ramp is
+  // coming (0.5 * 2 m/s^2 * 1 s^2 = 1 m), so the tail is large; the bulk must be small.
+  const EvaluationResult result = run(makePath(PathKind::kAcceleration, 10.0, 10.0, 2.0));
+  print("acceleration 1<->10 m/s", result);
+  EXPECT_LT(result.statistics.median, 0.30);
+  EXPECT_LT(result.statistics.p95, 1.5);
+  EXPECT_EQ(result.reinitialised, 0);
+}
+
+TEST(PredictionAccuracy, StopAndGo)
+{
+  const EvaluationResult summit = run(makePath(PathKind::kStopAndGo, 3.0, 10.0, 1.0));
+  print("stop_and_go 3 m/s, 1 m/s^2", summit);
+  EXPECT_LT(summit.statistics.median, 0.35);
+  EXPECT_LT(summit.statistics.p95, 1.0);
+  EXPECT_EQ(summit.reinitialised, 0);
+
+  const EvaluationResult car = run(makePath(PathKind::kStopAndGo, 10.0, 10.0, 3.0));
+  print("stop_and_go 10 m/s, 3 m/s^2", car);
+  EXPECT_LT(car.statistics.p95, 3.0);
+  EXPECT_EQ(car.reinitialised, 0);
+}
+
+TEST(PredictionAccuracy, BrakingPredictsComingToRestNotReversing)
+{
+  // 3 m/s, braking at 3 m/s^2 from t = 5 s: at rest from t = 6 s to t = 8 s.
+  const SyntheticTrajectory trajectory(makePath(PathKind::kStopAndGo, 3.0, 10.0, 3.0, 3.0, 9.0), kCameraRate);
+  PadMotionFilter filter{ FilterParameters{} };
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  for (int k = 0; k < trajectory.size(); ++k)
+  {
+    const double t = trajectory.sampleTime(k);
+    filter.addVision(t, trajectory.position(k) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    if (t > 5.6 && t < 5.9)  // mid-braking: the predicted path must never go backwards
+    {
+      const std::vector<PathPoint> path = filter.predictPath(t, 0.1, 2.0);
+      for (size_t i = 1; i < path.size(); ++i)
+        EXPECT_GE(path[i].position.x(), path[i - 1].position.x() - 0.01) << "at t = " << t << ", point " << i;
+    }
+    if (t > 6.5 && t < 7.0)  // standing: the prediction 1 s ahead stays put
+    {
+      const std::vector<PathPoint> path = filter.predictPath(t, 0.1, 1.0);
+      EXPECT_LT((path.back().position - trajectory.position(k + 30)).norm(), 0.15) << "at t = " << t;
+    }
+  }
+}
+
+TEST(PredictionAccuracy, FigureEight)
+{
+  // A turn reversal costs up to v * 2 * omega * T^2 / 2 = 0.9 m for a second; between reversals the
+  // filter is as good as on the circle.
+  const EvaluationResult result = run(makePath(PathKind::kFigure8, 3.0, 10.0, 1.0, 3.0, 60.0));
+  print("figure8 r10 3 m/s", result);
+  EXPECT_LT(result.statistics.median, 0.06);
+  EXPECT_LT(result.statistics.p95, 0.6);
+}
+
+TEST(PredictionAccuracy, FastCar)
+{
+  for (const PathKind kind : { PathKind::kStraight, PathKind::kCircle })
+  {
+    for (const double speed : { 15.0, 25.0 })
+    {
+      const EvaluationResult result = run(makePath(kind, speed, 50.0, 3.0, 1.0));
+      print((std::string(kind == PathKind::kCircle ? "car circle r50 " : "car straight ") +
+             std::to_string(int(speed)) + " m/s").c_str(), result);
+      EXPECT_LT(result.statistics.p95, 0.25) << speed << " m/s";
+    }
+  }
+}
+
+TEST(PredictionAccuracy, ZIsEstimatedAsAConstant)
+{
+  PadMotionFilter filter{ FilterParameters{} };
+  const SyntheticTrajectory trajectory(makePath(PathKind::kCircle, 3.0, 10.0, 1.0, 3.0, 10.0), kCameraRate);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  for (int k = 0; k < trajectory.size(); ++k)
+    filter.addVision(trajectory.sampleTime(k),
+                     trajectory.position(k) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+  const auto state = filter.stateAt(10.0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_NEAR(state->position.z(), 0.497, 0.01);
+  EXPECT_EQ(state->velocity.z(), 0.0);
+  for (const PathPoint& point : filter.predictPath(10.0, 0.1, 2.0))
+    EXPECT_NEAR(point.position.z(), state->position.z(), 1e-9);
+}
+
+TEST(Gaps, RandomDropsAndBlackoutsAreCoastedThrough)
+{
+  MeasurementSpec measurements;
+  measurements.drop_probability = 0.3;
+  measurements.blackouts = { { 10.0, 1.0 }, { 20.0, 2.0 } };
+  const TrajectorySpec spec = makePath(PathKind::kCircle, 3.0, 10.0, 1.0, 3.0, 30.0);
+  const EvaluationResult result = run(spec, measurements);
+  print("circle r10, 30% drops, blackouts", result);
+  EXPECT_EQ(result.untracked_ticks, 0) << "blackouts of 1-2 s are shorter than max_coast_time";
+  EXPECT_LT(result.statistics.median, 0.06);
+  // Predictions made during a blackout are of the same quality: the model extrapolates the circle.
+  for (size_t i = 0; i < result.times.size(); ++i)
+  {
+    if (result.times[i] >= 20.0 && result.times[i] < 22.0)
+    {
+      EXPECT_LT(result.errors[i], 0.30) << "predicted at t = " << result.times[i] << " during the blackout";
+    }
+  }
+}
+
+TEST(Gaps, TrackIsLostAfterTheCoastTimeAndRestartsOnTheNextFix)
+{
+  FilterParameters parameters;
+  parameters.max_coast_time = 1.5;
+  PadMotionFilter filter(parameters);
+  EXPECT_FALSE(filter.isTracking(0.0));
+  EXPECT_FALSE(filter.stateAt(0.0).has_value());
+  EXPECT_TRUE(filter.predictPath(0.0, 0.1, 1.0).empty());
+  feedStationary(filter, Eigen::Vector3d(1.0, 2.0, 0.5), 0.0, 2.0);
+  EXPECT_TRUE(filter.isTracking(2.0 + 1.4));
+  EXPECT_FALSE(filter.isTracking(2.0 + 1.6));
+  // Far away after the loss: no gating against the stale track, a new one starts.
+  EXPECT_EQ(filter.addVision(4.0, Eigen::Vector3d(30.0, 0.0, 0.5)), MeasurementOutcome::kInitialised);
+  EXPECT_TRUE(filter.isTracking(4.0));
+  EXPECT_NEAR((filter.stateAt(4.0)->position - Eigen::Vector3d(30.0, 0.0, 0.5)).norm(), 0.0, 1e-9);
+}
+
+TEST(Outliers, FalseDetectionsAreRejectedByTheGate)
+{
+  MeasurementSpec measurements;
+  measurements.outlier_probability = 0.05;
+  measurements.outlier_distance = 3.0;
+  const EvaluationResult clean = run(makePath(PathKind::kCircle, 3.0));
+  const EvaluationResult with_outliers = run(makePath(PathKind::kCircle, 3.0), measurements);
+  print("circle r10, 5% outliers at 3 m", with_outliers);
+  EXPECT_GT(with_outliers.rejected, 40);
+  EXPECT_EQ(with_outliers.reinitialised, 0);
+  EXPECT_LT(with_outliers.statistics.p95, clean.statistics.p95 + 0.02);
+}
+
+TEST(Outliers, PersistentJumpReinitialisesAfterConsecutiveRejections)
+{
+  FilterParameters parameters;
+  parameters.max_consecutive_rejections = 5;
+  PadMotionFilter filter(parameters);
+  feedStationary(filter, Eigen::Vector3d(0.0, 0.0, 0.5), 0.0, 3.0);
+  // The pad reappears 20 m away (e.g. after a long blackout): rejected until the 5th fix in a row.
+  const Eigen::Vector3d moved(20.0, 0.0, 0.5);
+  double t = 3.0;
+  for (int i = 1; i <= 4; ++i)
+    EXPECT_EQ(filter.addVision(t += 0.1, moved), MeasurementOutcome::kRejected) << "fix " << i;
+  EXPECT_EQ(filter.addVision(t += 0.1, moved), MeasurementOutcome::kReinitialised);
+  EXPECT_EQ(filter.addVision(t += 0.1, moved), MeasurementOutcome::kAccepted);
+  EXPECT_LT((filter.stateAt(t)->position - moved).norm(), 0.05);
+}
+
+TEST(Outliers, AnAcceptedFixResetsTheRejectionCount)
+{
+  FilterParameters parameters;
+  parameters.max_consecutive_rejections = 3;
+  PadMotionFilter filter(parameters);
+  const Eigen::Vector3d pad(0.0, 0.0, 0.5), outlier(5.0, 5.0, 0.5);
+  feedStationary(filter, pad, 0.0, 3.0);
+  double t = 3.0;
+  for (int cycle = 0; cycle < 5; ++cycle)
+  {
+    EXPECT_EQ(filter.addVision(t += 0.03, outlier), MeasurementOutcome::kRejected);
+    EXPECT_EQ(filter.addVision(t += 0.03, outlier), MeasurementOutcome::kRejected);
+    EXPECT_EQ(filter.addVision(t += 0.03, pad), MeasurementOutcome::kAccepted);
+  }
+}
+
+TEST(Stamps, OutOfOrderDuplicateAndNonFiniteFixesAreDropped)
+{
+  PadMotionFilter filter{ FilterParameters{} };
+  feedStationary(filter, Eigen::Vector3d(0.0, 0.0, 0.5), 0.0, 1.0);
+  const double state_time = filter.stateTime();
+  const Eigen::Vector3d before = filter.stateAt(2.0)->position;
+  const Eigen::Vector3d elsewhere(0.3, 0.0, 0.5);
+  EXPECT_EQ(filter.addVision(state_time, elsewhere), MeasurementOutcome::kDroppedStale);  // duplicate
+  EXPECT_EQ(filter.addVision(state_time - 0.2, elsewhere), MeasurementOutcome::kDroppedStale);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(filter.addVision(state_time + 0.1, Eigen::Vector3d(nan, 0.0, 0.5)), MeasurementOutcome::kDroppedInvalid);
+  EXPECT_EQ(filter.addVision(state_time + 0.1, Eigen::Vector3d(0.0, inf, 0.5)), MeasurementOutcome::kDroppedInvalid);
+  EXPECT_EQ(filter.addVision(nan, elsewhere), MeasurementOutcome::kDroppedInvalid);
+  EXPECT_EQ(filter.addGps(state_time + 0.1, Eigen::Vector2d(nan, 0.0)), MeasurementOutcome::kDroppedInvalid);
+  EXPECT_EQ(filter.stateTime(), state_time);
+  EXPECT_EQ(filter.stateAt(2.0)->position, before);
+  // Order is judged against the newest fix, not against the first one.
+  EXPECT_EQ(filter.addVision(state_time + 0.1, Eigen::Vector3d(0.0, 0.0, 0.5)), MeasurementOutcome::kAccepted);
+  EXPECT_EQ(filter.addVision(state_time + 0.05, Eigen::Vector3d(0.0, 0.0, 0.5)), MeasurementOutcome::kDroppedStale);
+}
+
+TEST(Stamps, ShuffledStreamStillTracks)
+{
+  // Every 5th fix arrives 2 frames late (network reordering): those are dropped, the rest tracked.
+  const SyntheticTrajectory trajectory(makePath(PathKind::kCircle, 3.0, 10.0, 1.0, 3.0, 20.0), kCameraRate);
+  PadMotionFilter filter{ FilterParameters{} };
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  int dropped = 0;
+  for (int k = 0; k + 2 < trajectory.size(); ++k)
+  {
+    const int index = (k % 5 == 4) ? k - 2 : k;
+    const auto outcome = filter.addVision(trajectory.sampleTime(index),
+                                          trajectory.position(index) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    dropped += outcome == MeasurementOutcome::kDroppedStale;
+  }
+  EXPECT_EQ(dropped, (trajectory.size() - 2) / 5);
+  const int last = trajectory.size() - 3;
+  const auto state = filter.stateAt(trajectory.sampleTime(last));
+  EXPECT_LT((state->position - trajectory.position(last)).norm(), 0.05);
+  EXPECT_LT((state->velocity.head<2>() - trajectory.velocity(last)).norm(), 0.10);
+}
+
+TEST(Gps, StartsATrackAtTheConfiguredHeightAndIsIgnoredWhileVisionIsFresh)
+{
+  FilterParameters parameters;
+  parameters.gps_pad_height = 1.72;
+  PadMotionFilter filter(parameters);
+  EXPECT_EQ(filter.addGps(0.0, Eigen::Vector2d(10.0, 5.0)), MeasurementOutcome::kInitialised);
+  EXPECT_NEAR(filter.stateAt(0.0)->position.z(), 1.72, 1e-9);
+  EXPECT_EQ(filter.addGps(0.2, Eigen::Vector2d(10.1, 5.0)), MeasurementOutcome::kAccepted);
+  EXPECT_EQ(filter.addVision(0.3, Eigen::Vector3d(10.05, 5.0, 1.70)), MeasurementOutcome::kAccepted);
+  EXPECT_EQ(filter.addGps(0.4, Eigen::Vector2d(10.3, 5.0)), MeasurementOutcome::kIgnored);
+  EXPECT_EQ(filter.addGps(0.3 + parameters.gps_vision_timeout + 0.1, Eigen::Vector2d(10.05, 5.0)),
+            MeasurementOutcome::kAccepted);
+}
+
+TEST(Gps, KeepsTheTrackThroughAVisionBlackoutLongerThanTheCoastTime)
+{
+  MeasurementSpec measurements;
+  measurements.blackouts = { { 10.0, 8.0 } };
+  const TrajectorySpec spec = makePath(PathKind::kCircle, 3.0, 10.0, 1.0, 3.0, 30.0);
+  const EvaluationResult vision_only = run(spec, measurements);
+  measurements.use_gps = true;
+  const EvaluationResult with_gps = run(spec, measurements);
+  print("circle r10, 8 s blackout, GPS", with_gps);
+  EXPECT_GT(vision_only.untracked_ticks, 100);
+  EXPECT_EQ(with_gps.untracked_ticks, 0);
+  for (size_t i = 0; i < with_gps.times.size(); ++i)
+  {
+    if (with_gps.times[i] >= 12.0 && with_gps.times[i] < 18.0)
+    {
+      // GPS only: 0.3 m noise at 5 Hz (measured max about 1 m).
+      EXPECT_LT(with_gps.errors[i], 1.5) << "at t = " << with_gps.times[i];
+    }
+    if (with_gps.times[i] >= 21.0)
+    {
+      // Vision back for 3 s.
+      EXPECT_LT(with_gps.errors[i], 0.15) << "at t = " << with_gps.times[i];
+    }
+  }
+}
+
+TEST(Api, PathHasOnePointPerTimeStepStartingAtTheCurrentState)
+{
+  PadMotionFilter filter{ FilterParameters{} };
+  for (int k = 0; k <= 60; ++k)  // straight along x at 2 m/s
+    filter.addVision(k / kCameraRate, Eigen::Vector3d(2.0 * k / kCameraRate, 0.0, 0.5));
+  const double t0 = 2.05;
+  const std::vector<PathPoint> path = filter.predictPath(t0, 0.1, 2.0);
+  ASSERT_EQ(path.size(), 21u);
+  const PadState now = *filter.stateAt(t0);
+  EXPECT_LT((path.front().position - now.position).norm(), 1e-9);
+  for (size_t k = 0; k < path.size(); ++k)
+  {
+    EXPECT_NEAR(path[k].time, t0 + 0.1 * k, 1e-9);
+    EXPECT_NEAR(path[k].position.x(), 2.0 * path[k].time, 0.02);
+    EXPECT_NEAR(path[k].velocity.x(), 2.0, 0.02);
+  }
+  EXPECT_EQ(filter.predictPath(t0, 0.1, 0.0).size(), 1u);
+  EXPECT_THROW(filter.predictPath(t0, 0.0, 1.0), std::invalid_argument);
+  EXPECT_THROW(filter.predictPath(t0, 0.1, -1.0), std::invalid_argument);
+}
+
+TEST(Api, CovariancesArePositiveDefiniteAndGrowWhileCoasting)
+{
+  PadMotionFilter filter{ FilterParameters{} };
+  feedStationary(filter, Eigen::Vector3d(0.0, 0.0, 0.5), 0.0, 3.0);
+  const PadState now = *filter.stateAt(3.0);
+  const PadState later = *filter.stateAt(5.0);
+  EXPECT_GT(now.position_covariance.llt().matrixLLT().diagonal().minCoeff(), 0.0);
+  EXPECT_EQ(now.position_covariance.llt().info(), Eigen::Success);
+  EXPECT_EQ(now.velocity_covariance.llt().info(), Eigen::Success);
+  EXPECT_LT(now.position_covariance(0, 0), 0.03 * 0.03);
+  EXPECT_GT(later.position_covariance(0, 0), now.position_covariance(0, 0));
+  EXPECT_GT(later.velocity_covariance(0, 0), now.velocity_covariance(0, 0));
+}
+
+TEST(Api, ResetForgetsTheTrackAndTheStamps)
+{
+  PadMotionFilter filter{ FilterParameters{} };
+  feedStationary(filter, Eigen::Vector3d(0.0, 0.0, 0.5), 10.0, 11.0);
+  filter.reset();
+  EXPECT_FALSE(filter.hasTrack());
+  EXPECT_EQ(filter.addVision(1.0, Eigen::Vector3d(0.0, 0.0, 0.5)), MeasurementOutcome::kInitialised);
+}
+
+TEST(Api, InvalidParametersAreNamed)
+{
+  FilterParameters parameters;
+  parameters.observation_covariance = 0.0;
+  EXPECT_NE(parameters.validate().find("observation_covariance"), std::string::npos);
+  EXPECT_THROW(PadMotionFilter{ parameters }, std::invalid_argument);
+  parameters = FilterParameters{};
+  parameters.model_covariance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(parameters.validate().find("model_covariance"), std::string::npos);
+  parameters = FilterParameters{};
+  parameters.max_consecutive_rejections = 0;
+  EXPECT_NE(parameters.validate().find("max_consecutive_rejections"), std::string::npos);
+  EXPECT_EQ(FilterParameters{}.validate(), "");
+}
+
+}  // namespace ped_traj_pred
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}

@@ -1,0 +1,181 @@
+"""Horizontal tracking controller and the types it works on, ROS-free.
+
+The velocity command is built in ``world`` and rotated into the *heading frame* at the very end
+(``ardrone/cmd_vel``: linear.x forward, linear.y left of the drone's yaw-only frame):
+
+    v_cmd = v_ff + kp * e + ki * integral(e)            (capped)
+    e     = pad(t + L) - (drone(t) + v_drone * L)
+    v_ff  = v_pad + a_pad * (age + T_v)
+
+- ``pad(t)`` comes from the *predicted* path (kalman_prediction_path); the prediction is ``age``
+  seconds old when it arrives, so it is read at the current time, not at its stamp: that is the
+  pipeline latency compensation.
+- ``L`` (lookahead) compares where pad and drone will be a little later; for straight motion it is
+  exactly a damping term on the relative velocity, on a curve it also anticipates the turn.
+- ``v_ff``: the pad's velocity, advanced by its acceleration over the prediction's age plus ``T_v``,
+  the drone's velocity-loop response time, so that on a circle the drone turns with the pad instead
+  of lagging behind it.
+"""
+import bisect
+import collections
+import dataclasses
+from typing import Optional, Sequence
+
+import numpy as np
+
+from .estimator import world_to_heading
+from .params import TrackingParams
+
+
+@dataclasses.dataclass
+class VelocityCommand:
+    """cmd_vel in the heading frame: forward, left, climb [m/s]; yaw rate [rad/s]."""
+    vx: float = 0.0
+    vy: float = 0.0
+    vz: float = 0.0
+    yaw_rate: float = 0.0
+
+
+@dataclasses.dataclass
+class DroneState:
+    """The drone's own estimate (never ground truth): world position and velocity, yaw, and the
+    sonar range from the feet to the surface below (None when invalid or out of range)."""
+    position: np.ndarray
+    velocity: np.ndarray
+    yaw: float
+    sonar_height: Optional[float] = None
+
+
+class PadPrediction:
+    """What the predictor says about the pad: its ``position`` and ``velocity`` (world) at ``stamp``
+    and the predicted path as (times, positions), each time absolute. Read it with ``position_at``."""
+
+    def __init__(self, stamp, position, velocity, path_times: Sequence[float] = (), path_positions=()):
+        self.stamp = float(stamp)
+        self.position = np.asarray(position, dtype=float)
+        self.velocity = np.asarray(velocity, dtype=float)
+        self.path_times = [float(t) for t in path_times]
+        self.path_positions = np.asarray(path_positions, dtype=float).reshape(-1, 3)
+        if len(self.path_times) != len(self.path_positions):
+            raise ValueError("path has %d times but %d positions" % (len(self.path_times), len(self.path_positions)))
+        if any(b < a for a, b in zip(self.path_times, self.path_times[1:])):
+            raise ValueError("path times must not decrease")
+
+    @property
+    def horizon(self):
+        """Last time the prediction covers."""
+        return self.path_times[-1] if self.path_times else self.stamp
+
+    def age(self, t):
+        return t - self.stamp
+
+    def position_at(self, t):
+        """Predicted pad position at time ``t``: interpolated along the path, extrapolated with the
+        velocity before its start and beyond its end."""
+        times = self.path_times
+        if len(times) < 2 or t <= times[0]:
+            anchor_t, anchor = (times[0], self.path_positions[0]) if times else (self.stamp, self.position)
+            return anchor + self.velocity * (t - anchor_t)
+        if t >= times[-1]:
+            return self.path_positions[-1] + self.velocity * (t - times[-1])
+        i = bisect.bisect_right(times, t)
+        t0, t1 = times[i - 1], times[i]
+        w = (t - t0) / (t1 - t0) if t1 > t0 else 0.0
+        return (1.0 - w) * self.path_positions[i - 1] + w * self.path_positions[i]
+
+
+def clamp_norm(vector, limit):
+    """``vector`` (2-D) scaled down to at most ``limit`` long."""
+    norm = float(np.hypot(vector[0], vector[1]))
+    if norm <= limit:
+        return vector
+    return vector * (limit / norm) if limit > 0.0 else vector * 0.0
+
+
+class TrackingController:
+    """PID on the predicted pad position with velocity and acceleration feed-forward."""
+
+    def __init__(self, params: TrackingParams):
+        self.p = params
+        self.integral = np.zeros(2)
+        self.last_time = None
+        self.velocity_history = collections.deque()  # (stamp, pad velocity) of recent predictions
+        self.acceleration = np.zeros(2)
+
+    def reset(self):
+        """Forget the integral (on entering a state where it would be stale)."""
+        self.integral[:] = 0.0
+        self.last_time = None
+
+    def errors(self, t, drone: DroneState, pad: PadPrediction):
+        """(error now, relative velocity now): horizontal pad minus drone, world frame."""
+        error = pad.position_at(t)[:2] - drone.position[:2]
+        relative_velocity = self.pad_velocity(t, pad) - drone.velocity[:2]
+        return error, relative_velocity
+
+    def pad_velocity(self, t, pad, ahead=0.0):
+        """Pad velocity at ``t + ahead`` from the last prediction and the acceleration estimate. The
+        acceleration is extrapolated no further than the window it was measured over: an old
+        prediction must not turn into an ever-growing speed command."""
+        self._observe(pad)
+        horizon = min(max(0.0, pad.age(t)), self.p.acceleration_window) + ahead
+        return pad.velocity[:2] + self.acceleration * horizon
+
+    def _observe(self, pad):
+        """Acceleration of the pad from its predicted velocities ``acceleration_window`` apart: a
+        difference over a long baseline, because the velocity of each prediction is noisy."""
+        history = self.velocity_history
+        if history and pad.stamp <= history[-1][0]:
+            return
+        if history and pad.stamp - history[-1][0] > self.p.lost_timeout:
+            history.clear()  # a gap: the old velocities say nothing about now
+        history.append((pad.stamp, pad.velocity[:2].copy()))
+        window = self.p.acceleration_window
+        while len(history) > 2 and pad.stamp - history[1][0] >= window:
+            history.popleft()
+        span = pad.stamp - history[0][0]
+        if window > 0.0 and span >= 0.5 * window:
+            self.acceleration = (history[-1][1] - history[0][1]) / span
+        else:
+            self.acceleration = np.zeros(2)
+
+    def world_velocity(self, t, drone: DroneState, pad: PadPrediction, accumulate=True):
+        """Horizontal velocity command in the world frame. ``accumulate`` False freezes the integral
+        (it still applies: at speed it holds what the drone's own velocity loop falls short by)."""
+        p = self.p
+        lookahead = p.lookahead
+        target = pad.position_at(t + lookahead)[:2]
+        error = target - (drone.position[:2] + drone.velocity[:2] * lookahead)
+        dt = 0.0 if self.last_time is None else max(0.0, min(0.2, t - self.last_time))
+        self.last_time = t
+        # The integral is for steady deficits (drag, the drone's own velocity loop falling short at
+        # speed); while the pad accelerates hard the error is a transient and integrating it would
+        # only overshoot afterwards.
+        steady = np.hypot(*self.acceleration) <= p.integral_max_pad_acceleration
+        if accumulate and steady and np.hypot(*error) < p.integral_error_limit and p.integral_gain > 0.0:
+            self.integral += error * dt
+            self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)
+        correction = clamp_norm(p.position_gain * error + p.integral_gain * self.integral, p.max_correction_speed)
+        feed = self.pad_velocity(t, pad, ahead=p.acceleration_feedforward)
+        return clamp_norm(feed + correction, p.max_horizontal_speed)
+
+    @staticmethod
+    def to_heading_frame(world_xy, yaw):
+        return world_to_heading(float(world_xy[0]), float(world_xy[1]), yaw)
+
+
+def hold_position_command(drone: DroneState, target_xy, params: TrackingParams, feed_forward_xy=(0.0, 0.0)):
+    """World velocity towards a fixed point (with an optional feed-forward), capped."""
+    error = np.asarray(target_xy[:2], dtype=float) - drone.position[:2]
+    correction = clamp_norm(params.position_gain * error, params.max_correction_speed)
+    return clamp_norm(np.asarray(feed_forward_xy, dtype=float) + correction, params.max_horizontal_speed)
+
+
+def climb_rate_towards(height, target_height, params: TrackingParams, limit=None):
+    """P control of the height above the pad, capped; zero inside a 3 cm band so the drone's own
+    altitude hold takes over."""
+    error = target_height - height
+    if abs(error) < 0.03:
+        return 0.0
+    limit = params.max_climb_rate if limit is None else limit
+    return max(-limit, min(limit, params.height_gain * error))

@@ -1,0 +1,361 @@
+"""The two thin ROS nodes of this package; all logic lives in estimator.py and state_machine.py.
+
+drone_estimator  ardrone/imu, ardrone/navdata, ardrone/gps/odom, ardrone/altimeter, ardrone/sonar_height
+                 -> ardrone/odom_estimate (nav_msgs/Odometry in `world`, child ardrone/base_link, at the
+                 IMU rate; twist.linear is the WORLD-frame velocity, as on ardrone/gps/odom and the
+                 ground truth; twist.angular the body rates from the IMU).
+
+platform_tracking ardrone/odom_estimate, kalman_prediction_path, kalman_platform_odom, ardrone/navdata,
+                 ardrone/sonar_height, ardrone/imu, landing_allowed (std_msgs/Bool, default true) and the
+                 operator requests -> ardrone/cmd_vel at rate_hz (sim time), ardrone/takeoff and
+                 ardrone/land as one-shot actions, platform_tracking/state (std_msgs/String, latched,
+                 on every change).
+
+Operator requests: platform_tracking/command (std_msgs/String: takeoff | land | force_land) is the
+unambiguous way. The thesis topics work too: ardrone/force_land (Empty); ardrone/takeoff and
+ardrone/land (Empty) from anyone but this node (messages whose publisher is this node, i.e. its own
+actions, are recognised by the connection header and ignored). Note that the drone itself also obeys
+ardrone/takeoff and ardrone/land: an operator's ardrone/land makes it descend at once, and the
+tracker then follows the pad down (state LANDING, committed) rather than starting its own approach;
+use platform_tracking/command "land" for the gated landing on the pad.
+
+Inputs with a non-finite value are dropped with a throttled warning naming the topic.
+"""
+import math
+import sys
+import threading
+
+import numpy as np
+import rospy
+from geometry_msgs.msg import Twist
+from landing_msgs.msg import Altimeter, Navdata
+from nav_msgs.msg import Odometry, Path
+from sensor_msgs.msg import Imu, Range
+from std_msgs.msg import Bool, Empty, String
+
+from .controller import DroneState, PadPrediction
+from .estimator import DroneEstimator, yaw_from_quaternion
+from .params import EstimatorParams, ParamError, TrackingParams, from_mapping
+from .state_machine import Inputs, State, TrackingStateMachine
+
+WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
+ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
+WORLD_FRAMES = ("world", "/world", "")
+COMMANDS = ("takeoff", "land", "force_land")
+
+
+def finite(*values):
+    return all(math.isfinite(v) for v in values)
+
+
+def warn_dropped(topic, why):
+    rospy.logwarn_throttle(WARN_PERIOD, "dropped a message on %s: %s" % (rospy.resolve_name(topic), why))
+
+
+def load_params(cls, check=None):
+    """The node's private parameters as ``cls``; a missing or bad one is fatal and named."""
+    source = "%s private parameters" % rospy.get_name()
+    try:
+        params = from_mapping(cls, rospy.get_param("~", {}), source)
+        return params.check(source) if check else params
+    except ParamError as err:
+        rospy.logfatal("%s cannot start: %s (see platform_tracking/config/)", rospy.get_name(), err)
+        sys.exit(2)
+
+
+def stamp_of(msg):
+    """Header stamp in seconds, the current time when the publisher left it empty."""
+    stamp = msg.header.stamp.to_sec()
+    return stamp if stamp > 0.0 else rospy.get_time()
+
+
+def wait_for_clock():
+    while not rospy.is_shutdown() and rospy.get_time() == 0.0:
+        rospy.sleep(0.01)  # under /use_sim_time, time is 0 until the first /clock
+
+
+# ------------------------------------------------------------------------------------------------
+class EstimatorNode:
+    def __init__(self):
+        self.params = load_params(EstimatorParams)
+        self.lock = threading.Lock()
+        self.estimator = self._new_estimator()
+        self.publisher = rospy.Publisher("ardrone/odom_estimate", Odometry, queue_size=10)
+        rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=20)
+        rospy.Subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=20)
+        rospy.Subscriber("ardrone/gps/odom", Odometry, self.on_gps, queue_size=5)
+        rospy.Subscriber("ardrone/altimeter", Altimeter, self.on_altimeter, queue_size=5)
+        rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5)
+
+    def _new_estimator(self):
+        return DroneEstimator(self.params, log=lambda line: rospy.loginfo("drone_estimator: %s", line))
+
+    def _at(self, t):
+        """Called with the lock held before using a measurement stamped ``t``: restarts the filter
+        when time jumped back (simulator reset, bag loop)."""
+        if self.estimator.time is not None and t < self.estimator.time - 1.0:
+            rospy.logwarn("drone_estimator: time jumped back from %.2f to %.2f s; restarting the estimate",
+                          self.estimator.time, t)
+            self.estimator = self._new_estimator()
+
+    def on_imu(self, msg):
+        q = msg.orientation
+        if not finite(q.w, q.x, q.y, q.z):
+            return warn_dropped("ardrone/imu", "non-finite orientation")
+        t = stamp_of(msg)
+        with self.lock:
+            self._at(t)
+            if not self.estimator.imu(t, (q.w, q.x, q.y, q.z)):
+                return warn_dropped("ardrone/imu", "orientation is not a unit quaternion")
+            estimate = self.estimator.estimate(t)
+        if estimate is not None:
+            self.publish(msg, estimate)
+
+    def on_navdata(self, msg):
+        if not finite(msg.vx, msg.vy, msg.vz):
+            return warn_dropped("ardrone/navdata", "non-finite velocity")
+        t = stamp_of(msg)
+        with self.lock:
+            self._at(t)
+            self.estimator.flow(t, msg.vx, msg.vy, msg.vz)
+
+    def on_gps(self, msg):
+        p, v = msg.pose.pose.position, msg.twist.twist.linear
+        if not finite(p.x, p.y, p.z):
+            return warn_dropped("ardrone/gps/odom", "non-finite position")
+        velocity = (v.x, v.y, v.z) if finite(v.x, v.y, v.z) else None
+        t = stamp_of(msg)
+        with self.lock:
+            self._at(t)
+            self.estimator.gps(t, (p.x, p.y, p.z), velocity)
+
+    def on_altimeter(self, msg):
+        if not finite(msg.altitude):
+            return warn_dropped("ardrone/altimeter", "non-finite altitude")
+        t = stamp_of(msg)
+        with self.lock:
+            self._at(t)
+            self.estimator.altimeter(t, msg.altitude)
+
+    def on_sonar(self, msg):
+        if math.isnan(msg.range):
+            return warn_dropped("ardrone/sonar_height", "range is NaN")
+        t = stamp_of(msg)
+        with self.lock:
+            self._at(t)
+            self.estimator.sonar(t, msg.range)  # +inf (no echo) is valid and simply unused
+
+    def publish(self, imu, estimate):
+        odom = Odometry()
+        odom.header.stamp = rospy.Time.from_sec(estimate.time)
+        odom.header.frame_id = self.params.frame_id
+        odom.child_frame_id = self.params.child_frame_id
+        position = odom.pose.pose.position
+        position.x, position.y, position.z = (float(v) for v in estimate.position)
+        orientation = odom.pose.pose.orientation
+        orientation.w, orientation.x, orientation.y, orientation.z = estimate.orientation
+        velocity = odom.twist.twist.linear
+        velocity.x, velocity.y, velocity.z = (float(v) for v in estimate.velocity)
+        odom.twist.twist.angular = imu.angular_velocity
+        covariance = [0.0] * 36
+        for i, variance in enumerate(estimate.position_variance):
+            covariance[i * 7] = float(variance)
+        for i in range(3, 6):
+            covariance[i * 7] = max(imu.orientation_covariance[0], 1e-6)
+        odom.pose.covariance = covariance
+        velocity_variance = self.params.flow_velocity_std ** 2
+        odom.twist.covariance = [velocity_variance if i in (0, 7, 14) else 0.0 for i in range(36)]
+        self.publisher.publish(odom)
+
+
+def estimator_main():
+    rospy.init_node("drone_estimator")
+    EstimatorNode()
+    rospy.spin()
+
+
+# ------------------------------------------------------------------------------------------------
+def build_prediction(path, odom):
+    """PadPrediction from the latest kalman_prediction_path ``(times, positions)`` and
+    kalman_platform_odom ``(stamp, position, velocity)``: the path gives the positions and the odom
+    the velocity; either alone when the other is missing, or the odom alone when the path is older
+    than it by more than 0.2 s (the predictor stopped publishing paths). None when neither exists."""
+    if path is not None and (odom is None or odom[0] <= path[0][0] + 0.2):
+        times, positions = path
+        if odom is not None and abs(odom[0] - times[0]) < 0.5:
+            velocity = odom[2]
+        elif len(times) > 1:
+            velocity = [(b - a) / (times[1] - times[0]) for a, b in zip(positions[0], positions[1])]
+        else:
+            velocity = (0.0, 0.0, 0.0)
+        return PadPrediction(times[0], positions[0], velocity, times, positions)
+    if odom is not None:
+        return PadPrediction(odom[0], odom[1], odom[2])
+    return None
+
+
+class TrackingNode:
+    def __init__(self):
+        self.params = load_params(TrackingParams, check=True)
+        self.lock = threading.Lock()
+        self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
+        self.estimate = None          # (stamp, DroneState without sonar)
+        self.sonar = None             # latest valid sonar range or None
+        self.imu_yaw = None           # (stamp, yaw)
+        self.navdata_state = None
+        self.path = None              # (times, positions) of the latest kalman_prediction_path
+        self.pad_odom = None          # (stamp, position, velocity) of the latest kalman_platform_odom
+        self.prediction = None        # PadPrediction built from the two, cached until one changes
+        self.requests = set()
+        self.landing_allowed = True
+        self.me = rospy.get_caller_id()
+
+        self.pub_cmd = rospy.Publisher("ardrone/cmd_vel", Twist, queue_size=1)
+        self.pub_takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
+        self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
+        self.pub_state = rospy.Publisher("platform_tracking/state", String, queue_size=1, latch=True)
+        rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5)
+        rospy.Subscriber("kalman_prediction_path", Path, self.on_path, queue_size=5)
+        rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5)
+        rospy.Subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=5)
+        rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5)
+        rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=5)
+        rospy.Subscriber("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
+        rospy.Subscriber("platform_tracking/command", String, self.on_command, queue_size=10)
+        rospy.Subscriber("ardrone/takeoff", Empty, lambda m: self.on_thesis_request(m, "takeoff"), queue_size=5)
+        rospy.Subscriber("ardrone/land", Empty, lambda m: self.on_thesis_request(m, "land"), queue_size=5)
+        rospy.Subscriber("ardrone/force_land", Empty, lambda m: self.on_thesis_request(m, "force_land"), queue_size=5)
+        self.pub_state.publish(String(data=self.machine.state.value))
+
+    # ----- inputs ------------------------------------------------------------------------------
+    def on_estimate(self, msg):
+        p, v, q = msg.pose.pose.position, msg.twist.twist.linear, msg.pose.pose.orientation
+        if not finite(p.x, p.y, p.z, v.x, v.y, v.z, q.w, q.x, q.y, q.z):
+            return warn_dropped("ardrone/odom_estimate", "non-finite value")
+        if msg.header.frame_id not in WORLD_FRAMES:
+            return warn_dropped("ardrone/odom_estimate", "frame '%s', expected 'world'" % msg.header.frame_id)
+        state = DroneState(np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]), yaw_from_quaternion(q.w, q.x, q.y, q.z))
+        with self.lock:
+            self.estimate = (stamp_of(msg), state)
+
+    def on_path(self, msg):
+        if msg.header.frame_id not in WORLD_FRAMES:
+            return warn_dropped("kalman_prediction_path", "frame '%s', expected 'world'" % msg.header.frame_id)
+        if not msg.poses:
+            return warn_dropped("kalman_prediction_path", "no poses")
+        positions = [(s.pose.position.x, s.pose.position.y, s.pose.position.z) for s in msg.poses]
+        if not all(finite(*xyz) for xyz in positions):
+            return warn_dropped("kalman_prediction_path", "non-finite position")
+        times = [s.header.stamp.to_sec() for s in msg.poses]
+        if any(t <= 0.0 for t in times) or any(b <= a for a, b in zip(times, times[1:])):
+            # Without per-pose times only the first pose (stamped with the message) can be used.
+            rospy.logwarn_throttle(WARN_PERIOD * 6, "%s: poses are not stamped with increasing future times; "
+                                   "using only the first" % rospy.resolve_name("kalman_prediction_path"))
+            times, positions = [stamp_of(msg)], positions[:1]
+        with self.lock:
+            self.path = (times, positions)
+            self.prediction = None
+
+    def on_pad_odom(self, msg):
+        p, v = msg.pose.pose.position, msg.twist.twist.linear
+        if not finite(p.x, p.y, p.z, v.x, v.y, v.z):
+            return warn_dropped("kalman_platform_odom", "non-finite value")
+        if msg.header.frame_id not in WORLD_FRAMES:
+            return warn_dropped("kalman_platform_odom", "frame '%s', expected 'world'" % msg.header.frame_id)
+        with self.lock:
+            self.pad_odom = (stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z))
+            self.prediction = None
+
+    def on_navdata(self, msg):
+        with self.lock:
+            self.navdata_state = int(msg.state)
+
+    def on_sonar(self, msg):
+        if math.isnan(msg.range):
+            return warn_dropped("ardrone/sonar_height", "range is NaN")
+        valid = math.isfinite(msg.range) and msg.range < msg.max_range if msg.max_range > 0 else math.isfinite(msg.range)
+        with self.lock:
+            self.sonar = float(msg.range) if valid else None
+
+    def on_imu(self, msg):
+        q = msg.orientation
+        if not finite(q.w, q.x, q.y, q.z):
+            return warn_dropped("ardrone/imu", "non-finite orientation")
+        with self.lock:
+            self.imu_yaw = (stamp_of(msg), yaw_from_quaternion(q.w, q.x, q.y, q.z))
+
+    def on_landing_allowed(self, msg):
+        with self.lock:
+            if bool(msg.data) != self.landing_allowed:
+                rospy.loginfo("platform_tracking: landing_allowed = %s", bool(msg.data))
+            self.landing_allowed = bool(msg.data)
+
+    def on_command(self, msg):
+        command = msg.data.strip().lower()
+        if command not in COMMANDS:
+            rospy.logwarn("platform_tracking: unknown command '%s' on %s; expected one of %s",
+                          msg.data, rospy.resolve_name("platform_tracking/command"), ", ".join(COMMANDS))
+            return
+        with self.lock:
+            self.requests.add(command)
+
+    def on_thesis_request(self, msg, command):
+        header = getattr(msg, "_connection_header", None) or {}
+        if header.get("callerid") == self.me:
+            return  # our own take-off/land action coming back
+        with self.lock:
+            self.requests.add(command)
+
+    # ----- the step ----------------------------------------------------------------------------
+    def _pad_prediction(self):
+        if self.prediction is None:
+            self.prediction = build_prediction(self.path, self.pad_odom)
+        return self.prediction
+
+    def step(self):
+        t = rospy.get_time()
+        with self.lock:
+            drone = None
+            if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
+                state = self.estimate[1]
+                yaw = self.imu_yaw[1] if self.imu_yaw is not None and t - self.imu_yaw[0] <= ESTIMATE_MAX_AGE \
+                    else state.yaw
+                drone = DroneState(state.position, state.velocity, yaw, self.sonar)
+            inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
+                            takeoff="takeoff" in self.requests, land="land" in self.requests,
+                            force_land="force_land" in self.requests, landing_allowed=self.landing_allowed)
+            self.requests.clear()
+        before = self.machine.state
+        out = self.machine.step(inputs)
+        if out.send_takeoff:
+            self.pub_takeoff.publish(Empty())
+        if out.send_land:
+            self.pub_land.publish(Empty())
+        if out.command is not None:
+            twist = Twist()
+            twist.linear.x, twist.linear.y, twist.linear.z = out.command.vx, out.command.vy, out.command.vz
+            twist.angular.z = out.command.yaw_rate
+            self.pub_cmd.publish(twist)
+        if out.state != before:
+            self.pub_state.publish(String(data=out.state.value))
+
+    def spin(self):
+        wait_for_clock()
+        rate = rospy.Rate(self.params.rate_hz)
+        while not rospy.is_shutdown():
+            self.step()
+            try:
+                rate.sleep()
+            except rospy.ROSTimeMovedBackwardsException:
+                rospy.logwarn("platform_tracking: time moved backwards; the state machine starts over")
+                with self.lock:
+                    self.machine = TrackingStateMachine(self.params, self.machine.logger)
+                    self.estimate = self.path = self.pad_odom = self.prediction = None
+                self.pub_state.publish(String(data=State.LANDED.value))
+            except rospy.ROSInterruptException:
+                break
+
+
+def tracking_main():
+    rospy.init_node("platform_tracking")
+    TrackingNode().spin()

@@ -1,0 +1,154 @@
+"""Parameters of the estimator and of the tracker, ROS-free.
+
+Each parameter is a dataclass field with a unit and an allowed range (``spec``). The dataclass
+defaults are the shipped defaults (config/*.yaml repeats them, documented); ``from_mapping`` is what
+the nodes use: every key is required there, so a typo or a forgotten key stops the node with a
+message naming it instead of silently flying with a default.
+"""
+import dataclasses
+import math
+
+
+class ParamError(ValueError):
+    """A parameter is missing, unknown or out of its range; the message names it."""
+
+
+def spec(default, low=None, high=None, unit=""):
+    return dataclasses.field(default=default, metadata={"low": low, "high": high, "unit": unit})
+
+
+def from_mapping(cls, mapping, source):
+    """Build ``cls`` from a flat mapping in which every field must be present (``source`` names
+    where the mapping came from, for the error message)."""
+    if not isinstance(mapping, dict):
+        raise ParamError("%s: expected a mapping of parameters, got %r" % (source, mapping))
+    values = {}
+    for field in dataclasses.fields(cls):
+        if field.name not in mapping:
+            raise ParamError("%s: required parameter '%s' is missing (%s)" % (source, field.name, _describe(field)))
+        values[field.name] = _check(field, mapping[field.name], source)
+    unknown = sorted(set(mapping) - set(values))
+    if unknown:
+        raise ParamError("%s: unknown parameter(s) %s (known: %s)" % (
+            source, ", ".join(unknown), ", ".join(f.name for f in dataclasses.fields(cls))))
+    return cls(**values)
+
+
+def _describe(field):
+    kind = type(field.default)
+    low, high, unit = field.metadata["low"], field.metadata["high"], field.metadata["unit"]
+    text = {float: "a number", int: "an integer", bool: "true or false", str: "a string"}[kind]
+    if low is not None and high is not None:
+        text += " in [%g, %g]" % (low, high)
+    return text + (" %s" % unit if unit else "")
+
+
+def _check(field, value, source):
+    kind = type(field.default)
+    ok = isinstance(value, kind) and not (kind is not bool and isinstance(value, bool))
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value, ok = float(value), True
+    if ok and kind is float and not math.isfinite(value):
+        ok = False
+    low, high = field.metadata["low"], field.metadata["high"]
+    if ok and low is not None and value < low:
+        ok = False
+    if ok and high is not None and value > high:
+        ok = False
+    if not ok:
+        raise ParamError("%s: parameter '%s': got %r, expected %s" % (source, field.name, value, _describe(field)))
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class EstimatorParams:
+    """See config/estimator.yaml for the meaning of each key."""
+    gps_position_std: float = spec(0.3, 0.001, 50.0, "m")
+    gps_gate_sigma: float = spec(5.0, 1.0, 100.0, "-")
+    gps_max_rejections: int = spec(10, 1, 1000, "fixes")
+    use_gps_altitude: bool = spec(True)
+    use_gps_velocity: bool = spec(True)
+    gps_velocity_std: float = spec(0.1, 0.001, 50.0, "m/s")
+    flow_velocity_std: float = spec(0.05, 0.0, 5.0, "m/s")
+    flow_timeout: float = spec(0.5, 0.01, 10.0, "s")
+    position_process_noise: float = spec(0.0003, 0.0, 10.0, "m^2/s")
+    flow_bias_process_noise: float = spec(1e-6, 0.0, 1.0, "(m/s)^2/s")
+    initial_flow_bias_std: float = spec(0.05, 0.0, 5.0, "m/s")
+    correction_smoothing_time: float = spec(0.3, 0.0, 10.0, "s")
+    altimeter_std: float = spec(0.1, 0.001, 50.0, "m")
+    altitude_process_noise: float = spec(0.001, 0.0, 10.0, "m^2/s")
+    sonar_std: float = spec(0.02, 0.001, 1.0, "m")
+    sonar_ground_gate: float = spec(0.15, 0.0, 5.0, "m")
+    sonar_max_range: float = spec(6.0, 0.1, 50.0, "m")
+    foot_clearance: float = spec(0.065, 0.0, 1.0, "m")
+    frame_id: str = spec("world")
+    child_frame_id: str = spec("ardrone/base_link")
+
+
+@dataclasses.dataclass(frozen=True)
+class TrackingParams:
+    """See config/tracking.yaml for the meaning of each key."""
+    rate_hz: float = spec(30.0, 1.0, 500.0, "Hz")
+    # take-off and heights
+    nominal_height: float = spec(4.0, 0.5, 50.0, "m")
+    takeoff_climb_rate: float = spec(1.0, 0.1, 5.0, "m/s")
+    takeoff_timeout: float = spec(3.0, 0.1, 60.0, "s")
+    height_gain: float = spec(1.0, 0.0, 20.0, "1/s")
+    max_climb_rate: float = spec(1.0, 0.1, 5.0, "m/s")
+    fallback_pad_height: float = spec(0.497, 0.0, 10.0, "m")
+    foot_clearance: float = spec(0.065, 0.0, 1.0, "m")
+    sonar_pad_radius: float = spec(0.35, 0.0, 5.0, "m")
+    sonar_consistency: float = spec(0.4, 0.0, 10.0, "m")
+    # horizontal controller
+    position_gain: float = spec(1.2, 0.0, 20.0, "1/s")
+    integral_gain: float = spec(0.5, 0.0, 20.0, "1/s^2")
+    integral_speed_limit: float = spec(2.0, 0.0, 20.0, "m/s")
+    integral_error_limit: float = spec(2.0, 0.0, 100.0, "m")
+    integral_max_pad_acceleration: float = spec(1.0, 0.0, 100.0, "m/s^2")
+    lookahead: float = spec(0.3, 0.0, 5.0, "s")
+    acceleration_feedforward: float = spec(0.2, 0.0, 5.0, "s")
+    acceleration_window: float = spec(0.5, 0.0, 10.0, "s")
+    max_correction_speed: float = spec(3.0, 0.0, 40.0, "m/s")
+    max_horizontal_speed: float = spec(20.0, 0.1, 40.0, "m/s")
+    # target lost / relocating
+    lost_timeout: float = spec(1.0, 0.05, 60.0, "s")
+    found_max_age: float = spec(0.5, 0.01, 60.0, "s")
+    relocate_height: float = spec(6.0, 0.5, 50.0, "m")
+    # tracking -> landing
+    auto_land: bool = spec(True)
+    min_tracking_time: float = spec(10.0, 0.0, 600.0, "s")
+    settle_error: float = spec(0.3, 0.01, 10.0, "m")
+    settle_time: float = spec(2.0, 0.0, 60.0, "s")
+    # landing
+    landing_descent_rate: float = spec(0.3, 0.05, 3.0, "m/s")
+    descend_max_error: float = spec(0.25, 0.01, 10.0, "m")
+    descend_max_relative_speed: float = spec(0.5, 0.01, 10.0, "m/s")
+    hold_max_error: float = spec(0.5, 0.01, 10.0, "m")
+    retry_climb_rate: float = spec(0.5, 0.05, 5.0, "m/s")
+    retry_height: float = spec(2.0, 0.2, 50.0, "m")
+    abort_error: float = spec(1.5, 0.05, 50.0, "m")
+    gate_height: float = spec(0.35, 0.05, 5.0, "m")
+    gate_error: float = spec(0.1, 0.01, 5.0, "m")
+    gate_relative_speed: float = spec(0.25, 0.01, 10.0, "m/s")
+    gate_ready_time: float = spec(0.2, 0.0, 10.0, "s")
+    gate_timeout: float = spec(4.0, 0.1, 120.0, "s")
+    land_ack_timeout: float = spec(1.0, 0.05, 30.0, "s")
+
+    def check(self, source="tracking parameters"):
+        """Relations between parameters that a single range cannot express."""
+        problems = []
+        if self.gate_error > self.descend_max_error:
+            problems.append("gate_error (%g m) must not exceed descend_max_error (%g m)" % (
+                self.gate_error, self.descend_max_error))
+        if not self.descend_max_error <= self.hold_max_error <= self.abort_error:
+            problems.append("expected descend_max_error <= hold_max_error <= abort_error, got %g, %g, %g m" % (
+                self.descend_max_error, self.hold_max_error, self.abort_error))
+        if not self.gate_height < self.retry_height <= self.nominal_height:
+            problems.append("expected gate_height < retry_height <= nominal_height, got %g, %g, %g m" % (
+                self.gate_height, self.retry_height, self.nominal_height))
+        if self.found_max_age > self.lost_timeout:
+            problems.append("found_max_age (%g s) must not exceed lost_timeout (%g s)" % (
+                self.found_max_age, self.lost_timeout))
+        if problems:
+            raise ParamError("%s: %s" % (source, "; ".join(problems)))
+        return self

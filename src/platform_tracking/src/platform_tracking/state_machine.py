@@ -1,0 +1,425 @@
+"""Take-off / tracking / landing state machine (thesis 3.3.1), ROS-free.
+
+States and what the drone does in each (heights are above the pad, measured from the feet):
+
+- LANDED: nothing is commanded (another module or the operator may fly the drone).
+- TAKING_OFF: ``ardrone/takeoff`` is sent, then the drone climbs at ``takeoff_climb_rate`` to
+  ``nominal_height`` while it already follows the pad horizontally whenever a prediction is fresh.
+- TRACKING: PID on the predicted pad position at ``nominal_height`` (see controller.py).
+- LANDING: descends at ``landing_descent_rate`` while tracking, but only while the horizontal error
+  and the relative velocity are small; it holds its height while they are not, and climbs back to
+  ``retry_height`` to re-try when the error grows or the touchdown gate is not met in time. At
+  ``gate_height`` it commits to the touchdown only once error and relative speed have stayed inside
+  the gate for ``gate_ready_time``: then ``ardrone/land`` is sent (the drone descends by itself,
+  still obeying the horizontal command, which keeps tracking) and there is no way back.
+- RELOCATING: the pad has not been seen for ``lost_timeout``: climb to ``relocate_height`` for a
+  wider view and fly to the last predicted position (following the prediction for as long as it
+  reaches, then holding there); hover in place when nothing was ever predicted.
+- FORCE_LANDING: ``force_land``: ``ardrone/land`` at once, no tracking, hold position.
+
+Every state change goes through ``_transition``, which logs ``A -> B (reason)``. Events inside a
+state (touchdown committed, re-try started, a request refused) are logged by ``_event``.
+"""
+import dataclasses
+import enum
+import math
+from typing import List, Optional
+
+import numpy as np
+
+from .controller import (DroneState, PadPrediction, TrackingController, VelocityCommand, climb_rate_towards,
+                         hold_position_command)
+from .params import TrackingParams
+
+
+class State(enum.Enum):
+    LANDED = "LANDED"
+    TAKING_OFF = "TAKING_OFF"
+    TRACKING = "TRACKING"
+    LANDING = "LANDING"
+    RELOCATING = "RELOCATING"
+    FORCE_LANDING = "FORCE_LANDING"
+
+
+class Nav(enum.IntEnum):
+    """landing_msgs/Navdata states (mirrored here to keep this module ROS-free)."""
+    UNKNOWN = 0
+    INITED = 1
+    LANDED = 2
+    FLYING = 3
+    HOVERING = 4
+    TEST = 5
+    TAKING_OFF = 6
+    GOTO_HOVER = 7
+    LANDING = 8
+    LOOPING = 9
+    CRASHED = 10
+
+
+AIRBORNE_NAV = (Nav.FLYING, Nav.HOVERING, Nav.TAKING_OFF, Nav.GOTO_HOVER, Nav.LANDING, Nav.LOOPING)
+
+
+@dataclasses.dataclass
+class Inputs:
+    """Everything one step needs. ``drone`` is None until the estimator is ready; ``pad`` is the
+    latest prediction (None if there never was one: its age tells whether it is fresh); the
+    requests are one-shot (true on the step they arrive)."""
+    time: float
+    drone: Optional[DroneState] = None
+    pad: Optional[PadPrediction] = None
+    navdata_state: Optional[int] = None
+    takeoff: bool = False
+    land: bool = False
+    force_land: bool = False
+    landing_allowed: bool = True
+
+
+@dataclasses.dataclass
+class Outputs:
+    """``command`` is None when nothing should be published (LANDED); ``send_takeoff`` and
+    ``send_land`` are one-shot actions; ``log`` the lines logged during the step."""
+    state: State
+    command: Optional[VelocityCommand] = None
+    send_takeoff: bool = False
+    send_land: bool = False
+    log: List[str] = dataclasses.field(default_factory=list)
+    error: Optional[float] = None            # horizontal distance drone - pad now [m]
+    height: Optional[float] = None           # height above the pad (feet) used for control [m]
+
+
+class TrackingStateMachine:
+    def __init__(self, params: TrackingParams = TrackingParams(), logger=None):
+        self.p = params.check()
+        self.logger = logger or (lambda line: None)
+        self.controller = TrackingController(params)
+        self.state = State.LANDED
+        self.entered = 0.0                       # time the current state was entered
+        self.takeoff_pending = False
+        self.land_pending = False
+        self.last_pad: Optional[PadPrediction] = None
+        # TRACKING
+        self.settled_since = None
+        self.refusal_logged = False
+        # LANDING
+        self.committed = False
+        self.land_sent_at = None
+        self.retrying = False
+        self.retries = 0
+        self.at_gate_since = None
+        self.ready_since = None
+        # FORCE_LANDING
+        self.saw_landing_nav = False
+        # Height of the surface the drone took off from (the pad, normally): the height reference
+        # until a prediction gives the pad's own height.
+        self.takeoff_surface_z = None
+        self._out = None
+
+    # ----- bookkeeping ---------------------------------------------------------------------------
+    def _transition(self, new_state, reason, t):
+        """The one place where the state changes."""
+        line = "%s -> %s (%s)" % (self.state.value, new_state.value, reason)
+        self.state = new_state
+        self.entered = t
+        self.settled_since = None
+        self.refusal_logged = False
+        self.committed = False
+        self.land_sent_at = None
+        self.retrying = False
+        self.at_gate_since = None
+        self.ready_since = None
+        self.saw_landing_nav = False
+        if new_state == State.RELOCATING:
+            self.controller.reset()  # the integral belongs to the track that was lost
+        if new_state == State.TAKING_OFF:
+            self.takeoff_pending = False
+        if new_state in (State.LANDING, State.LANDED, State.FORCE_LANDING):
+            self.land_pending = False
+        if new_state == State.LANDED:
+            self.takeoff_pending = False
+            self.retries = 0
+        self._log(line)
+
+    def _event(self, text):
+        self._log("%s: %s" % (self.state.value, text))
+
+    def _log(self, line):
+        self._out.log.append(line)
+        self.logger(line)
+
+    def _send_land(self, t):
+        self._out.send_land = True
+        self.land_sent_at = t
+
+    def _commit(self, t, reason):
+        self.committed = True
+        self._send_land(t)
+        self._event("touchdown committed: ardrone/land sent (%s)" % reason)
+
+    # ----- helpers -------------------------------------------------------------------------------
+    def _fresh(self, pad, t, max_age):
+        return pad is not None and pad.age(t) <= max_age
+
+    def _height(self, drone, pad, t):
+        """Height of the feet above the pad: the sonar where it can only be seeing the pad (the drone
+        is right above it and the reading agrees with the estimate), else the estimated altitude
+        minus the pad's height (from the prediction, else the configured one)."""
+        p = self.p
+        if pad is not None:
+            pad_z = pad.position_at(t)[2]
+        else:
+            pad_z = self.takeoff_surface_z if self.takeoff_surface_z is not None else p.fallback_pad_height
+        estimated = drone.position[2] - pad_z - p.foot_clearance
+        sonar = drone.sonar_height
+        if pad is not None and sonar is not None and math.isfinite(sonar):
+            offset = pad.position_at(t)[:2] - drone.position[:2]
+            if math.hypot(*offset) < p.sonar_pad_radius and abs(sonar - estimated) < p.sonar_consistency:
+                return sonar
+        return estimated
+
+    def _command(self, world_xy, vz, yaw):
+        vx, vy = TrackingController.to_heading_frame(world_xy, yaw)
+        return VelocityCommand(vx, vy, vz, 0.0)
+
+    def _tracking_xy(self, t, drone, pad, accumulate=True):
+        return self.controller.world_velocity(t, drone, pad, accumulate=accumulate)
+
+    # ----- the step ------------------------------------------------------------------------------
+    def step(self, inputs: Inputs) -> Outputs:
+        self._out = Outputs(state=self.state)
+        t = inputs.time
+        if inputs.pad is not None:
+            self.last_pad = inputs.pad
+        if inputs.takeoff:
+            self.takeoff_pending = True
+        if inputs.land:
+            self.land_pending = True
+        nav = inputs.navdata_state
+        airborne_nav = nav in AIRBORNE_NAV
+
+        # Rules that hold in every state, by priority.
+        if inputs.force_land:
+            if self.state not in (State.LANDED, State.FORCE_LANDING) or airborne_nav:
+                self._transition(State.FORCE_LANDING, "force_land requested", t)
+                self._send_land(t)
+            else:
+                self._event("force_land ignored: already on the ground")
+        if nav == Nav.CRASHED and self.state != State.LANDED:
+            self._transition(State.LANDED, "navdata reports CRASHED", t)
+
+        handler = {State.LANDED: self._landed, State.TAKING_OFF: self._taking_off, State.TRACKING: self._tracking,
+                   State.LANDING: self._landing, State.RELOCATING: self._relocating,
+                   State.FORCE_LANDING: self._force_landing}[self.state]
+        if self.state != State.LANDED and inputs.drone is None:
+            # No estimate (estimator silent or not ready): never fly blind; hold where it is.
+            self._out.command = VelocityCommand()
+            if self.state == State.FORCE_LANDING:
+                self._force_landing(inputs)
+        else:
+            handler(inputs)
+        if self.state == State.LANDED:
+            self._out.command = None
+        self._out.state = self.state
+        return self._out
+
+    # ----- states --------------------------------------------------------------------------------
+    def _landed(self, inp):
+        t = inp.time
+        if inp.land and not self.takeoff_pending:
+            self.land_pending = False  # nothing to land
+        if not self.takeoff_pending:
+            return
+        if inp.drone is None:
+            if inp.takeoff:
+                self._event("take-off waits for the state estimate")
+            return
+        if inp.navdata_state in AIRBORNE_NAV:
+            self._transition(State.TAKING_OFF, "take-off requested; the drone is already airborne", t)
+        else:
+            sonar = inp.drone.sonar_height
+            if sonar is not None and math.isfinite(sonar) and sonar < 0.3:
+                self.takeoff_surface_z = float(inp.drone.position[2]) - self.p.foot_clearance - sonar
+            self._transition(State.TAKING_OFF, "take-off requested", t)
+            self._out.send_takeoff = True
+        self._taking_off(inp)
+
+    def _external_landing(self, inp):
+        """The drone reports LANDING although we did not send land: someone else did (operator on
+        ardrone/land, supervisor). Keep tracking horizontally while it descends."""
+        if inp.navdata_state == Nav.LANDING and self.state != State.LANDING:
+            self._transition(State.LANDING, "navdata reports LANDING: an external land command", inp.time)
+            self.committed = True
+            self.land_sent_at = inp.time
+            return True
+        return False
+
+    def _touched_down(self, inp):
+        if inp.navdata_state == Nav.LANDED and inp.time - self.entered > 0.0:
+            self._transition(State.LANDED, "touchdown: navdata reports LANDED", inp.time)
+            return True
+        return False
+
+    def _taking_off(self, inp):
+        p, t, drone = self.p, inp.time, inp.drone
+        if inp.navdata_state == Nav.LANDED or inp.navdata_state is None:
+            if t - self.entered > p.takeoff_timeout:
+                self._transition(State.LANDED, "take-off not acknowledged within %.1f s" % p.takeoff_timeout, t)
+                return
+        elif self._external_landing(inp):
+            return self._landing(inp)
+        pad = self.last_pad
+        fresh = self._fresh(pad, t, p.lost_timeout)
+        height = self._height(drone, pad, t)
+        self._out.height = height
+        xy = self._tracking_xy(t, drone, pad) if fresh else np.zeros(2)
+        if fresh:
+            self._out.error = float(np.hypot(*self.controller.errors(t, drone, pad)[0]))
+        airborne = inp.navdata_state in AIRBORNE_NAV
+        if airborne and height >= p.nominal_height - 0.1:
+            if fresh:
+                self._transition(State.TRACKING, "nominal height %.1f m reached, pad in sight" % p.nominal_height, t)
+                return self._tracking(inp)
+            self._transition(State.RELOCATING, "nominal height %.1f m reached, no fresh pad prediction"
+                             % p.nominal_height, t)
+            return self._relocating(inp)
+        self._out.command = self._command(xy, p.takeoff_climb_rate, drone.yaw)
+
+    def _tracking(self, inp):
+        p, t, drone, pad = self.p, inp.time, inp.drone, self.last_pad
+        if self._touched_down(inp) or self._external_landing(inp):
+            return self._landing(inp) if self.state == State.LANDING else None
+        if not self._fresh(pad, t, p.lost_timeout):
+            reason = "no pad prediction" if pad is None else "pad prediction %.1f s old" % pad.age(t)
+            self._transition(State.RELOCATING, "target lost: %s" % reason, t)
+            return self._relocating(inp)
+        error, _ = self.controller.errors(t, drone, pad)
+        distance = float(np.hypot(*error))
+        self._out.error = distance
+        if distance < p.settle_error:
+            self.settled_since = t if self.settled_since is None else self.settled_since
+        else:
+            self.settled_since = None
+        settled = self.settled_since is not None and t - self.settled_since >= p.settle_time
+        auto = p.auto_land and t - self.entered >= p.min_tracking_time and settled
+        if self.land_pending or auto:
+            if inp.landing_allowed:
+                why = "land requested" if self.land_pending else \
+                    "tracked %.0f s, error below %.2f m for %.1f s" % (t - self.entered, p.settle_error, p.settle_time)
+                self._transition(State.LANDING, why, t)
+                return self._landing(inp)
+            if not self.refusal_logged:
+                self._event("ready to land but landing is not allowed (supervisor); keep tracking")
+                self.refusal_logged = True
+        height = self._height(drone, pad, t)
+        self._out.height = height
+        vz = climb_rate_towards(height, p.nominal_height, p)
+        self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
+
+    def _landing(self, inp):
+        p, t, drone, pad = self.p, inp.time, inp.drone, self.last_pad
+        if self._touched_down(inp):
+            return
+        if self.committed:
+            return self._final_descent(inp)
+        if self._external_landing(inp):
+            return self._final_descent(inp)
+        if not self._fresh(pad, t, p.lost_timeout):
+            self._transition(State.RELOCATING, "target lost during the descent", t)
+            return self._relocating(inp)
+        if not inp.landing_allowed:
+            self._transition(State.TRACKING, "landing no longer allowed (supervisor)", t)
+            return self._tracking(inp)
+        error, relative_velocity = self.controller.errors(t, drone, pad)
+        distance, relative_speed = float(np.hypot(*error)), float(np.hypot(*relative_velocity))
+        if distance > p.abort_error:
+            self._transition(State.TRACKING, "error %.2f m > abort_error %.2f m: back to nominal height to re-try"
+                             % (distance, p.abort_error), t)
+            return self._tracking(inp)
+        height = self._height(drone, pad, t)
+        self._out.error, self._out.height = distance, height
+        in_gate = distance < p.gate_error and relative_speed < p.gate_relative_speed
+        at_gate = height <= p.gate_height + 0.05
+
+        if self.retrying:
+            if height >= p.retry_height - 0.05:
+                self.retrying = False
+                self._event("re-try %d: at %.2f m, descending again" % (self.retries, height))
+        elif distance > p.hold_max_error:
+            self._start_retry(t, "error %.2f m > hold_max_error %.2f m" % (distance, p.hold_max_error), height)
+        elif at_gate:
+            self.at_gate_since = t if self.at_gate_since is None else self.at_gate_since
+            self.ready_since = (t if self.ready_since is None else self.ready_since) if in_gate else None
+            if self.ready_since is not None and t - self.ready_since >= p.gate_ready_time:
+                self._commit(t, "height %.2f m, error %.3f m, relative speed %.2f m/s" % (
+                    height, distance, relative_speed))
+                return self._final_descent(inp)
+            if t - self.at_gate_since > p.gate_timeout:
+                self._start_retry(t, "not inside the touchdown gate for %.1f s (error %.2f m, relative speed "
+                                  "%.2f m/s)" % (p.gate_timeout, distance, relative_speed), height)
+        else:
+            self.at_gate_since = self.ready_since = None
+
+        if self.retrying:
+            vz = p.retry_climb_rate
+        elif distance <= p.descend_max_error and relative_speed <= p.descend_max_relative_speed and not at_gate:
+            vz = -p.landing_descent_rate if height > p.gate_height + 0.1 else \
+                climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
+        elif at_gate:
+            vz = climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
+        else:
+            vz = 0.0  # outside the descent cone: stop descending, let the tracking catch up
+        self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
+
+    def _start_retry(self, t, reason, height):
+        self.retrying = True
+        self.retries += 1
+        self.at_gate_since = self.ready_since = None
+        self._event("re-try %d: %s; climbing from %.2f m to %.2f m" % (self.retries, reason, height, self.p.retry_height))
+
+    def _final_descent(self, inp):
+        """Committed: the drone descends by itself; keep the horizontal tracking, from the last
+        prediction extrapolated if the camera no longer sees the pad this close."""
+        p, t, drone, pad = self.p, inp.time, inp.drone, self.last_pad
+        if inp.navdata_state not in (Nav.LANDING, Nav.LANDED) and self.land_sent_at is not None \
+                and t - self.land_sent_at > p.land_ack_timeout:
+            self._event("land not acknowledged within %.1f s: sending it again" % p.land_ack_timeout)
+            self._send_land(t)
+        if pad is not None and pad.age(t) <= p.lost_timeout + 2.0:
+            xy = self._tracking_xy(t, drone, pad, accumulate=False)
+            self._out.error = float(np.hypot(*self.controller.errors(t, drone, pad)[0]))
+        else:
+            xy = np.zeros(2)
+        self._out.command = self._command(xy, 0.0, drone.yaw)
+
+    def _relocating(self, inp):
+        p, t, drone, pad = self.p, inp.time, inp.drone, self.last_pad
+        if self._touched_down(inp) or self._external_landing(inp):
+            return self._landing(inp) if self.state == State.LANDING else None
+        if self._fresh(pad, t, p.found_max_age):
+            self._transition(State.TRACKING, "pad seen again (prediction %.2f s old)" % pad.age(t), t)
+            return self._tracking(inp)
+        height = self._height(drone, pad, t)
+        self._out.height = height
+        vz = climb_rate_towards(height, p.relocate_height, p)
+        if pad is None:
+            xy = np.zeros(2)  # nothing known: hover in place
+        else:
+            # Follow the last prediction as far as it reaches, then wait at its end.
+            until = min(t, pad.horizon)
+            feed = pad.velocity[:2] if t < pad.horizon else np.zeros(2)
+            xy = hold_position_command(drone, pad.position_at(until)[:2], p, feed)
+        self._out.command = self._command(xy, vz, drone.yaw)
+
+    def _force_landing(self, inp):
+        t = inp.time
+        if inp.navdata_state == Nav.LANDING:
+            self.saw_landing_nav = True
+        # LANDED counts once the drone was seen landing (or after the ack time): right after a
+        # take-off command the navdata may still say LANDED although the drone is about to lift off.
+        if inp.navdata_state == Nav.LANDED and (self.saw_landing_nav or t - self.entered > self.p.land_ack_timeout):
+            self._transition(State.LANDED, "forced landing complete: navdata reports LANDED", t)
+            return
+        if inp.navdata_state not in (Nav.LANDING, Nav.LANDED) and self.land_sent_at is not None \
+                and t - self.land_sent_at > self.p.land_ack_timeout:
+            self._event("land not acknowledged within %.1f s: sending it again" % self.p.land_ack_timeout)
+            self._send_land(t)
+        self._out.command = VelocityCommand()  # land where it is: no horizontal motion

@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""TEST STAND-IN for uav_vision + ped_traj_pred (not vision): publishes kalman_prediction_path and
+kalman_platform_odom from the simulator's ground-truth pad, with noise and latency, so the tracking
+nodes can be exercised before the real pipeline exists. For tests only: ground truth must never feed
+the flying system outside a test.
+
+Like uav_vision, it anchors the pad's world position on the drone's own estimate:
+pad = ardrone/odom_estimate + (true pad - true drone) + noise.
+Parameters (private): ~noise [m] 0.03, ~latency [s] 0.05, ~rate_hz 30, ~path_time [s] 2, ~time_step [s] 0.1.
+"""
+import collections
+
+import numpy as np
+import rospy
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Odometry, Path
+
+
+class StandIn:
+    def __init__(self):
+        self.noise = rospy.get_param("~noise", 0.03)
+        self.latency = rospy.get_param("~latency", 0.05)
+        self.path_time = rospy.get_param("~path_time", 2.0)
+        self.time_step = rospy.get_param("~time_step", 0.1)
+        self.rng = np.random.default_rng(rospy.get_param("~seed", 0))
+        self.pad_history = collections.deque(maxlen=20)   # (t, true pad position)
+        self.truth = self.estimate = None
+        self.queue = collections.deque()
+        self.pub_path = rospy.Publisher("kalman_prediction_path", Path, queue_size=5)
+        self.pub_odom = rospy.Publisher("kalman_platform_odom", Odometry, queue_size=5)
+        rospy.Subscriber("groundtruth/landing_pad", PoseStamped, self.on_pad, queue_size=5)
+        rospy.Subscriber("ardrone/ground_truth/state", Odometry, self.on_truth, queue_size=5)
+        rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5)
+
+    @staticmethod
+    def _xyz(point):
+        return np.array([point.x, point.y, point.z])
+
+    def on_pad(self, msg):
+        self.pad_history.append((msg.header.stamp.to_sec(), self._xyz(msg.pose.position)))
+
+    def on_truth(self, msg):
+        self.truth = self._xyz(msg.pose.pose.position)
+
+    def on_estimate(self, msg):
+        self.estimate = self._xyz(msg.pose.pose.position)
+
+    def sample(self):
+        t = rospy.get_time()
+        if len(self.pad_history) >= 6 and self.truth is not None and self.estimate is not None:
+            stamp, pad = self.pad_history[-1]
+            old_stamp, old_pad = self.pad_history[-6]
+            velocity = (pad - old_pad) / max(1e-3, stamp - old_stamp)
+            velocity[2] = 0.0
+            seen = self.estimate + (pad - self.truth) + self.rng.normal(0.0, self.noise, 3)
+            self.queue.append((t + self.latency, stamp, seen, velocity))
+        while self.queue and self.queue[0][0] <= t:
+            _, stamp, seen, velocity = self.queue.popleft()
+            self.publish(stamp, seen, velocity)
+
+    def publish(self, stamp, position, velocity):
+        odom = Odometry()
+        odom.header.stamp, odom.header.frame_id = rospy.Time.from_sec(stamp), "world"
+        odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z = position
+        odom.pose.pose.orientation.w = 1.0
+        odom.twist.twist.linear.x, odom.twist.twist.linear.y, odom.twist.twist.linear.z = velocity
+        path = Path()
+        path.header = odom.header
+        for k in range(int(round(self.path_time / self.time_step)) + 1):
+            pose = PoseStamped()
+            pose.header.frame_id = "world"
+            pose.header.stamp = rospy.Time.from_sec(stamp + k * self.time_step)
+            pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = position + velocity * k * self.time_step
+            pose.pose.orientation.w = 1.0
+            path.poses.append(pose)
+        self.pub_odom.publish(odom)
+        self.pub_path.publish(path)
+
+
+def main():
+    rospy.init_node("pipeline_stand_in")
+    node = StandIn()
+    while not rospy.is_shutdown() and rospy.get_time() == 0.0:
+        rospy.sleep(0.01)
+    rate = rospy.Rate(rospy.get_param("~rate_hz", 30.0))
+    while not rospy.is_shutdown():
+        node.sample()
+        try:
+            rate.sleep()
+        except (rospy.ROSTimeMovedBackwardsException, rospy.ROSInterruptException):
+            break
+
+
+if __name__ == "__main__":
+    main()

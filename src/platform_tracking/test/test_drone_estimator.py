@@ -1,0 +1,215 @@
+"""The drone's own estimator on synthetic sensor data: noise filtered, drift bounded, step responses,
+frames, outliers and sensor fallbacks. Sensor rates and noise are those of docs/conventions.md."""
+import math
+
+import numpy as np
+import pytest
+
+from platform_tracking.estimator import DroneEstimator, heading_to_world, world_to_heading, yaw_from_quaternion
+from platform_tracking.params import EstimatorParams
+
+GPS_STD, FLOW_STD, ALT_STD, SONAR_STD = 0.3, 0.05, 0.1, 0.01
+
+
+def yaw_quaternion(yaw):
+    return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+
+def fly(trajectory, seconds, seed=0, flow_bias=(0.0, 0.0), gps_outage=None, gps_offset=None, ground=0.0,
+        estimator=None, dt=0.002, gps_velocity=False):
+    """Feed ``trajectory(t) -> (position (3,), velocity (3,), yaw)`` through the sensors at their
+    rates; returns (times, true positions, estimated positions, estimator) sampled at 100 Hz."""
+    rng = np.random.default_rng(seed)
+    est = estimator or DroneEstimator(EstimatorParams())
+    rates = {"imu": 100, "flow": 50, "gps": 5, "alt": 20, "sonar": 25}
+    next_due = {name: 0.0 for name in rates}
+    times, truth, estimates = [], [], []
+    for i in range(int(round(seconds / dt)) + 1):
+        t = i * dt
+        position, velocity, yaw = trajectory(t)
+        due = {name: t + 1e-9 >= next_due[name] for name in rates}
+        for name in rates:
+            if due[name]:
+                next_due[name] += 1.0 / rates[name]
+        if due["flow"]:
+            fx, fy = world_to_heading(velocity[0], velocity[1], yaw)
+            est.flow(t, fx + flow_bias[0] + rng.normal(0, FLOW_STD), fy + flow_bias[1] + rng.normal(0, FLOW_STD),
+                     velocity[2] + rng.normal(0, FLOW_STD))
+        if due["gps"] and not (gps_outage and gps_outage[0] <= t < gps_outage[1]):
+            fix = np.array(position) + rng.normal(0, GPS_STD, 3)
+            if gps_offset and t >= gps_offset[0]:
+                fix[:2] += gps_offset[1]
+            velocity_fix = np.array(velocity) + rng.normal(0, 0.1, 3) if gps_velocity else None
+            est.gps(t, fix, velocity_fix)
+        if due["alt"]:
+            est.altimeter(t, position[2] + rng.normal(0, ALT_STD))
+        if due["sonar"]:
+            est.sonar(t, position[2] - ground - 0.065 + rng.normal(0, SONAR_STD))
+        if due["imu"]:
+            est.imu(t, yaw_quaternion(yaw))
+            e = est.estimate(t)
+            if e is not None:
+                times.append(t)
+                truth.append(np.array(position, dtype=float))
+                estimates.append(e.position.copy())
+    return np.array(times), np.array(truth), np.array(estimates), est
+
+
+def hover(t):
+    return (3.0, -2.0, 4.0), (0.0, 0.0, 0.0), 0.3
+
+
+def circle(t, radius=10.0, speed=2.0, height=4.0):
+    w = speed / radius
+    return ((radius * math.cos(w * t), radius * math.sin(w * t), height),
+            (-speed * math.sin(w * t), speed * math.cos(w * t), 0.0), w * t + math.pi / 2)
+
+
+def horizontal_error(truth, estimates, after=None, times=None):
+    mask = slice(None) if after is None else times >= after
+    return np.hypot(*(estimates[mask, :2] - truth[mask, :2]).T)
+
+
+def test_frames_heading_world_round_trip_and_yaw():
+    assert heading_to_world(1.0, 0.0, math.pi / 2) == pytest.approx((0.0, 1.0), abs=1e-12)
+    assert heading_to_world(0.0, 1.0, math.pi / 2) == pytest.approx((-1.0, 0.0), abs=1e-12)
+    assert world_to_heading(*heading_to_world(0.3, -0.7, 2.0), 2.0) == pytest.approx((0.3, -0.7))
+    assert yaw_from_quaternion(*yaw_quaternion(-2.5)) == pytest.approx(-2.5)
+
+
+def test_flow_is_rotated_from_the_heading_frame_with_the_imu_yaw():
+    est = DroneEstimator()
+    est.imu(0.0, yaw_quaternion(math.pi / 2))  # facing +y
+    est.gps(0.0, (0.0, 0.0, 2.0))
+    est.altimeter(0.0, 2.0)
+    est.flow(0.0, 1.0, 0.0, 0.0)              # forward at 1 m/s
+    e = est.estimate(1.0)
+    assert e.velocity[:2] == pytest.approx((0.0, 1.0), abs=1e-9)
+    assert e.position[:2] == pytest.approx((0.0, 1.0), abs=1e-9)
+    assert e.yaw == pytest.approx(math.pi / 2)
+
+
+def test_not_ready_until_attitude_position_and_height_are_known():
+    est = DroneEstimator()
+    assert est.estimate(0.0) is None
+    est.imu(0.0, (1.0, 0.0, 0.0, 0.0))
+    est.altimeter(0.0, 1.0)
+    assert not est.ready and est.estimate() is None
+    est.gps(0.1, (1.0, 2.0, 1.0))
+    assert est.ready and est.estimate().position[:2] == pytest.approx((1.0, 2.0))
+
+
+def test_hover_gps_noise_is_filtered_and_the_estimate_is_smooth():
+    times, truth, estimates, _ = fly(hover, 60.0)
+    error = horizontal_error(truth, estimates, after=10.0, times=times)
+    assert np.sqrt(np.mean(error ** 2)) < 0.08      # raw GPS: 0.42 m horizontal RMS
+    assert error.max() < 0.2
+    steps = np.hypot(*np.diff(estimates[times >= 1.0, :2], axis=0).T)
+    assert steps.max() < 0.01                       # per 10 ms: no jumps at the 5 Hz fixes
+    z_error = np.abs(estimates[times >= 5.0, 2] - 4.0)
+    assert z_error.max() < 0.1
+
+
+def test_moving_circle_error_stays_small():
+    times, truth, estimates, _ = fly(circle, 60.0, seed=3)
+    error = horizontal_error(truth, estimates, after=10.0, times=times)
+    assert np.sqrt(np.mean(error ** 2)) < 0.1
+    assert error.max() < 0.25
+
+
+def test_biased_flow_does_not_drift_and_the_bias_is_learnt():
+    times, truth, estimates, est = fly(circle, 120.0, seed=1, flow_bias=(0.1, 0.0))
+    error = horizontal_error(truth, estimates, after=40.0, times=times)
+    assert error.max() < 0.3
+    # Pure integration of the biased flow would be 12 m off by now.
+    learnt = np.hypot(*est.horizontal.bias)
+    assert learnt == pytest.approx(0.1, abs=0.04)
+
+
+def test_gps_velocity_reveals_the_flow_bias_quickly():
+    times, truth, estimates, est = fly(circle, 20.0, seed=1, flow_bias=(0.1, -0.05), gps_velocity=True)
+    assert est.horizontal.bias == pytest.approx((0.1, -0.05), abs=0.02)
+    _, _, _, without = fly(circle, 20.0, seed=1, flow_bias=(0.1, -0.05))
+    assert np.hypot(*(without.horizontal.bias - (0.1, -0.05))) > np.hypot(*(est.horizontal.bias - (0.1, -0.05)))
+
+
+def test_gps_outage_dead_reckons_on_the_flow_then_recovers():
+    times, truth, estimates, _ = fly(circle, 50.0, seed=2, gps_outage=(20.0, 30.0))
+    error = horizontal_error(truth, estimates)
+    in_outage = (times >= 20.0) & (times < 30.0)
+    assert error[in_outage].max() < 0.25
+    assert error[times >= 40.0].max() < 0.2
+
+
+def test_step_in_velocity_is_followed_without_lag():
+    def accelerate(t):
+        v = 0.0 if t < 20.0 else 3.0
+        x = 0.0 if t < 20.0 else 3.0 * (t - 20.0)
+        return (x, 0.0, 3.0), (v, 0.0, 0.0), 0.0
+    times, truth, estimates, _ = fly(accelerate, 30.0, seed=4)
+    error = estimates[:, 0] - truth[:, 0]
+    before = error[(times >= 19.0) & (times < 20.0)].mean()
+    during = error[(times >= 20.0) & (times < 21.0)]
+    assert np.abs(during - before).max() < 0.03     # the flow carries the step: no lag to catch up
+    assert np.abs(estimates[(times >= 20.5), 0] - truth[(times >= 20.5), 0]).max() < 0.3
+
+
+def test_step_in_altitude_is_followed():
+    def climb(t):
+        z = 1.0 if t < 10.0 else min(4.0, 1.0 + (t - 10.0))
+        vz = 1.0 if 10.0 <= t < 13.0 else 0.0
+        return (0.0, 0.0, z), (0.0, 0.0, vz), 0.0
+    times, truth, estimates, _ = fly(climb, 20.0, seed=5, ground=-100.0)  # sonar never sees the ground
+    z_error = np.abs(estimates[times >= 2.0, 2] - truth[times >= 2.0, 2])
+    assert z_error.max() < 0.12
+
+
+def test_gps_position_step_is_followed_smoothly():
+    """The GPS reference moves 1 m (e.g. a satellite change): the estimate converges to it with the
+    filter's time constant (about 7 s) without jumping."""
+    times, truth, estimates, _ = fly(hover, 70.0, seed=0, gps_offset=(20.0, np.array([1.0, 0.0])))
+    shifted = truth.copy()
+    shifted[times >= 20.0, 0] += 1.0
+    error = horizontal_error(shifted, estimates, times=times)
+    assert error[(times >= 20.0) & (times < 20.3)].min() > 0.8       # no jump to the new fix
+    assert error[(times >= 28.0) & (times < 32.0)].mean() < 0.5      # half way within ~10 s
+    assert error[times >= 50.0].mean() < 0.15
+    steps = np.hypot(*np.diff(estimates[times >= 1.0, :2], axis=0).T)
+    assert steps.max() < 0.01
+
+
+def test_a_wild_gps_fix_is_rejected_and_persistent_disagreement_reanchors():
+    est = DroneEstimator(EstimatorParams(gps_max_rejections=3))
+    est.imu(0.0, (1.0, 0.0, 0.0, 0.0))
+    est.altimeter(0.0, 1.0)
+    for i in range(20):
+        est.gps(0.2 * i, (0.0, 0.0, 1.0))
+    assert not est.gps(4.2, (20.0, 0.0, 1.0))
+    assert est.estimate().position[0] == pytest.approx(0.0, abs=1e-6)
+    assert not est.gps(4.4, (20.0, 0.0, 1.0))
+    assert est.gps(4.6, (20.0, 0.0, 1.0))  # third in a row: the estimate was wrong
+    assert est.estimate().position[0] == pytest.approx(20.0)
+    assert est.counters["gps_reanchored"] == 1
+
+
+def test_sonar_corrects_height_over_the_ground_but_not_over_the_pad():
+    est = DroneEstimator()
+    est.imu(0.0, (1.0, 0.0, 0.0, 0.0))
+    est.gps(0.0, (0.0, 0.0, 2.0))
+    est.altimeter(0.0, 2.0)
+    assert est.sonar(0.01, 2.0 - 0.065 + 0.05)        # ground: consistent, used
+    assert not est.sonar(0.02, 2.0 - 0.065 - 0.497)   # pad below: 0.5 m short, ignored
+    assert not est.sonar(0.03, math.inf)
+    assert not est.sonar(0.04, float("nan"))
+
+
+def test_flow_timeout_falls_back_to_gps_velocity_then_holds():
+    est = DroneEstimator()
+    est.imu(0.0, (1.0, 0.0, 0.0, 0.0))
+    est.altimeter(0.0, 2.0)
+    est.gps(0.0, (0.0, 0.0, 2.0), velocity=(0.0, 0.0, 0.0))
+    est.flow(0.0, 1.0, 0.0, 0.0)
+    est.gps(0.6, (0.6, 0.0, 2.0), velocity=(0.0, 2.0, 0.0))  # flow stale by now
+    assert est.estimate(0.7).velocity[:2] == pytest.approx((0.0, 2.0), abs=0.05)
+    est.imu(2.0, (1.0, 0.0, 0.0, 0.0))                       # everything stale: hold
+    assert est.estimate(2.0).velocity[:2] == pytest.approx((0.0, 0.0), abs=0.05)

@@ -1,0 +1,448 @@
+"""Every transition of the take-off / tracking / landing state machine, the landing gate, re-tries,
+the lost target and force_land, on hand-made inputs (no physics)."""
+import math
+
+import numpy as np
+import pytest
+
+from platform_tracking.controller import DroneState, PadPrediction
+from platform_tracking.params import TrackingParams
+from platform_tracking.state_machine import Inputs, Nav, State, TrackingStateMachine
+
+P = TrackingParams()
+PAD_Z = 0.497
+
+
+def z_at(height):
+    """base_link altitude for a feet height ``height`` above the pad."""
+    return height + PAD_Z + P.foot_clearance
+
+
+def drone(x=0.0, y=0.0, height=4.0, vx=0.0, vy=0.0, yaw=0.0, sonar=None):
+    return DroneState(np.array([x, y, z_at(height)]), np.array([vx, vy, 0.0]), yaw, sonar)
+
+
+def pad(t, x=0.0, y=0.0, vx=0.0, vy=0.0, age=0.05):
+    """A prediction stamped ``age`` s before ``t`` whose pad is at (x, y) *at t*."""
+    stamp = t - age
+    start = np.array([x - vx * age, y - vy * age, PAD_Z])
+    velocity = np.array([vx, vy, 0.0])
+    times = [stamp + 0.1 * k for k in range(21)]
+    return PadPrediction(stamp, start, velocity, times, [start + velocity * (tk - stamp) for tk in times])
+
+
+class Flight:
+    """Drives a state machine step by step at 30 Hz."""
+
+    def __init__(self, **params):
+        self.lines = []
+        self.sm = TrackingStateMachine(TrackingParams(**params), logger=self.lines.append)
+        self.t = 0.0
+        self.out = None
+
+    def step(self, dt=1.0 / 30.0, **kw):
+        self.t += dt
+        kw.setdefault("navdata_state", Nav.HOVERING)
+        self.out = self.sm.step(Inputs(self.t, **kw))
+        return self.out
+
+    def run(self, seconds, make=None, **kw):
+        """Steps for ``seconds``; ``make(t)`` may return extra inputs per step."""
+        outs = []
+        end = self.t + seconds
+        while self.t < end - 1e-9:
+            extra = dict(kw)
+            if make is not None:
+                extra.update(make(self.t + 1.0 / 30.0))
+            outs.append(self.step(**extra))
+        return outs
+
+    @property
+    def state(self):
+        return self.sm.state
+
+
+def tracking_flight(**params):
+    """A flight brought to TRACKING at the nominal height above a still pad."""
+    f = Flight(**params)
+    f.step(drone=drone(height=0.02, sonar=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30), navdata_state=Nav.FLYING)
+    assert f.state == State.TRACKING
+    return f
+
+
+def landing_flight(height=2.0, **params):
+    f = tracking_flight(**params)
+    f.step(drone=drone(height=height), pad=pad(f.t + 1 / 30), land=True)
+    assert f.state == State.LANDING
+    return f
+
+
+def fresh(x=0.0, y=0.0, vx=0.0, vy=0.0, **drone_kw):
+    """Input maker: drone as given, fresh prediction of a pad at (x, y)."""
+    return lambda t: {"drone": drone(**drone_kw), "pad": pad(t, x, y, vx, vy)}
+
+
+# ----- LANDED --------------------------------------------------------------------------------------
+def test_landed_commands_nothing_and_logs_transitions_as_a_arrow_b_with_reason():
+    f = Flight()
+    out = f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED)
+    assert out.state == State.LANDED and out.command is None and not out.send_takeoff
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    assert f.lines == ["LANDED -> TAKING_OFF (take-off requested)"]
+
+
+def test_landed_to_taking_off_sends_takeoff_and_climbs_at_one_metre_per_second():
+    f = Flight()
+    out = f.step(drone=drone(height=0.02, sonar=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    assert out.state == State.TAKING_OFF and out.send_takeoff
+    assert out.command.vz == pytest.approx(P.takeoff_climb_rate)
+    out = f.step(drone=drone(height=0.5), navdata_state=Nav.TAKING_OFF)
+    assert not out.send_takeoff and out.command.vz == pytest.approx(1.0)
+
+
+def test_takeoff_when_already_airborne_does_not_send_takeoff():
+    f = Flight()
+    out = f.step(drone=drone(height=1.0), navdata_state=Nav.HOVERING, takeoff=True)
+    assert out.state == State.TAKING_OFF and not out.send_takeoff
+    assert "already airborne" in f.lines[-1]
+
+
+def test_takeoff_waits_for_the_state_estimate():
+    f = Flight()
+    out = f.step(drone=None, navdata_state=Nav.LANDED, takeoff=True)
+    assert out.state == State.LANDED and not out.send_takeoff
+    out = f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED)
+    assert out.state == State.TAKING_OFF and out.send_takeoff
+
+
+def test_land_request_while_landed_is_ignored():
+    f = Flight()
+    out = f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, land=True)
+    assert out.state == State.LANDED and not out.send_land and not f.sm.land_pending
+
+
+# ----- TAKING_OFF ----------------------------------------------------------------------------------
+def test_taking_off_gives_up_when_the_drone_never_leaves_the_ground():
+    f = Flight()
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    f.run(P.takeoff_timeout - 0.1, drone=drone(height=0.02), navdata_state=Nav.LANDED)
+    assert f.state == State.TAKING_OFF
+    f.run(0.2, drone=drone(height=0.02), navdata_state=Nav.LANDED)
+    assert f.state == State.LANDED and "not acknowledged" in f.lines[-1]
+
+
+def test_taking_off_tracks_the_pad_horizontally_while_climbing():
+    f = Flight()
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    out = f.step(drone=drone(height=1.0, vx=2.0), pad=pad(f.t + 1 / 30, vx=2.0), navdata_state=Nav.TAKING_OFF)
+    assert out.state == State.TAKING_OFF
+    assert out.command.vx == pytest.approx(2.0, abs=0.1) and out.command.vz == pytest.approx(1.0)
+
+
+def test_taking_off_to_tracking_at_the_nominal_height_with_the_pad_in_sight():
+    f = Flight()
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    out = f.step(drone=drone(height=3.5), pad=pad(f.t + 1 / 30), navdata_state=Nav.FLYING)
+    assert out.state == State.TAKING_OFF
+    out = f.step(drone=drone(height=3.95), pad=pad(f.t + 1 / 30), navdata_state=Nav.FLYING)
+    assert out.state == State.TRACKING and "nominal height" in f.lines[-1]
+
+
+def test_taking_off_to_relocating_at_the_nominal_height_without_a_prediction():
+    f = Flight()
+    f.step(drone=drone(height=0.02, sonar=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    out = f.step(drone=drone(height=4.0), navdata_state=Nav.FLYING)
+    assert out.state == State.RELOCATING and "no fresh pad prediction" in f.lines[-1]
+
+
+def test_takeoff_height_reference_is_the_surface_it_took_off_from_until_the_pad_is_seen():
+    """On the car (pad 1.72 m) the configured Summit XL pad height must not end the climb early."""
+    f = Flight()
+    car_pad = 1.72
+    on_pad = DroneState(np.array([0.0, 0.0, car_pad + 0.065 + 0.02]), np.zeros(3), 0.0, 0.02)
+    f.step(drone=on_pad, navdata_state=Nav.LANDED, takeoff=True)
+    at = lambda h: DroneState(np.array([0.0, 0.0, car_pad + 0.065 + h]), np.zeros(3), 0.0, None)  # noqa: E731
+    assert f.step(drone=at(3.0), navdata_state=Nav.FLYING).state == State.TAKING_OFF
+    assert f.step(drone=at(4.0), navdata_state=Nav.FLYING).state == State.RELOCATING
+
+
+# ----- TRACKING ------------------------------------------------------------------------------------
+def test_tracking_holds_the_nominal_height():
+    f = tracking_flight()
+    assert f.step(drone=drone(height=3.0), pad=pad(f.t + 1 / 30)).command.vz > 0.5
+    assert f.step(drone=drone(height=5.0), pad=pad(f.t + 1 / 30)).command.vz < -0.5
+    assert f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30)).command.vz == 0.0
+
+
+def test_tracking_to_relocating_when_the_prediction_is_older_than_lost_timeout():
+    f = tracking_flight()
+    last = pad(f.t)
+    f.run(P.lost_timeout - 0.1, drone=drone(), pad=last)
+    assert f.state == State.TRACKING
+    f.run(0.2, drone=drone(), pad=last)
+    assert f.state == State.RELOCATING and "target lost" in f.lines[-1]
+
+
+def test_tracking_to_landing_after_min_tracking_time_once_settled():
+    f = tracking_flight()
+    f.run(P.min_tracking_time - 0.2, make=fresh(x=0.1))
+    assert f.state == State.TRACKING
+    f.run(0.4, make=fresh(x=0.1))
+    assert f.state == State.LANDING and "tracked" in f.lines[-1]
+
+
+def test_tracking_does_not_land_while_the_error_is_large():
+    f = tracking_flight()
+    f.run(P.min_tracking_time + 5.0, make=fresh(x=P.settle_error + 0.1))
+    assert f.state == State.TRACKING
+    f.run(P.settle_time - 0.1, make=fresh(x=0.0))
+    assert f.state == State.TRACKING  # settled, but not for settle_time yet
+    f.run(0.2, make=fresh(x=0.0))
+    assert f.state == State.LANDING
+
+
+def test_tracking_without_auto_land_waits_for_the_land_request():
+    f = tracking_flight(auto_land=False)
+    f.run(P.min_tracking_time + 5.0, make=fresh())
+    assert f.state == State.TRACKING
+    f.step(drone=drone(), pad=pad(f.t + 1 / 30), land=True)
+    assert f.state == State.LANDING and "land requested" in f.lines[-1]
+
+
+def test_land_request_waits_while_landing_is_not_allowed():
+    f = tracking_flight(auto_land=False)
+    f.step(drone=drone(), pad=pad(f.t + 1 / 30), land=True, landing_allowed=False)
+    f.run(2.0, make=fresh(), landing_allowed=False)
+    assert f.state == State.TRACKING
+    assert sum("not allowed" in line for line in f.lines) == 1  # said once, not at 30 Hz
+    f.step(drone=drone(), pad=pad(f.t + 1 / 30), landing_allowed=True)
+    assert f.state == State.LANDING
+
+
+def test_land_request_during_take_off_lands_as_soon_as_tracking_starts():
+    f = Flight()
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30), navdata_state=Nav.FLYING, land=True)
+    f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30), navdata_state=Nav.FLYING)
+    assert f.lines[-2:] == ["TAKING_OFF -> TRACKING (nominal height 4.0 m reached, pad in sight)",
+                            "TRACKING -> LANDING (land requested)"]
+
+
+# ----- RELOCATING ----------------------------------------------------------------------------------
+def test_relocating_climbs_and_follows_the_last_prediction_then_waits_at_its_end():
+    f = tracking_flight()
+    last = pad(f.t, x=0.0, vx=2.0, age=0.0)     # path reaches 2 s ahead: x = 4 m
+    f.run(P.lost_timeout + 0.1, drone=drone(), pad=last)
+    assert f.state == State.RELOCATING
+    out = f.step(drone=drone(x=1.0, height=4.0), pad=last)
+    assert out.command.vz > 0.5                 # up to relocate_height for a wider view
+    assert out.command.vx > 1.5                 # still following the prediction's motion
+    f.run(2.0, drone=drone(x=4.0, height=P.relocate_height), pad=last)
+    out = f.step(drone=drone(x=4.0, height=P.relocate_height), pad=last)
+    assert out.command.vx == pytest.approx(0.0, abs=0.05) and out.command.vz == 0.0  # at the end: wait
+
+
+def test_relocating_with_nothing_ever_seen_hovers_in_place():
+    f = Flight()
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    out = f.step(drone=drone(x=5.0, height=4.0), navdata_state=Nav.FLYING)
+    assert out.state == State.RELOCATING
+    assert (out.command.vx, out.command.vy) == (0.0, 0.0) and out.command.vz > 0.0
+
+
+def test_relocating_to_tracking_needs_a_prediction_younger_than_found_max_age():
+    f = tracking_flight()
+    f.run(P.lost_timeout + 0.1, drone=drone(), pad=pad(f.t))
+    assert f.state == State.RELOCATING
+    f.step(drone=drone(), pad=pad(f.t + 1 / 30, age=P.found_max_age + 0.1))
+    assert f.state == State.RELOCATING
+    f.step(drone=drone(), pad=pad(f.t + 1 / 30, age=0.05))
+    assert f.state == State.TRACKING and "pad seen again" in f.lines[-1]
+
+
+def test_lost_target_during_landing_relocates():
+    f = landing_flight()
+    last = pad(f.t)
+    f.run(P.lost_timeout + 0.1, drone=drone(height=2.0), pad=last)
+    assert f.state == State.RELOCATING and "lost during the descent" in f.lines[-1]
+
+
+# ----- LANDING -------------------------------------------------------------------------------------
+def test_landing_descends_at_the_landing_rate_while_the_error_is_small():
+    f = landing_flight()
+    out = f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=0.1))
+    assert out.command.vz == pytest.approx(-P.landing_descent_rate)
+
+
+def test_landing_stops_descending_while_the_error_or_relative_speed_is_too_large():
+    f = landing_flight()
+    out = f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=0.4))   # descend < 0.4 < hold
+    assert out.command.vz == 0.0 and f.state == State.LANDING
+    out = f.step(drone=drone(height=2.0, vx=-1.0), pad=pad(f.t + 1 / 30))   # closing at 1 m/s
+    assert out.command.vz == 0.0
+
+
+def test_landing_climbs_back_to_retry_height_when_the_error_grows_then_descends_again():
+    f = landing_flight(height=1.0)
+    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30, x=0.7))
+    assert f.state == State.LANDING and out.command.vz == pytest.approx(P.retry_climb_rate)
+    assert "re-try 1" in f.lines[-1]
+    out = f.step(drone=drone(height=1.5), pad=pad(f.t + 1 / 30, x=0.0))      # error gone, still climbing
+    assert out.command.vz == pytest.approx(P.retry_climb_rate)
+    out = f.step(drone=drone(height=P.retry_height), pad=pad(f.t + 1 / 30))
+    assert out.command.vz == pytest.approx(-P.landing_descent_rate) and "descending again" in f.lines[-1]
+
+
+def test_landing_back_to_tracking_when_the_error_exceeds_abort_error():
+    f = landing_flight()
+    f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=P.abort_error + 0.1))
+    assert f.state == State.TRACKING and "abort_error" in f.lines[-1]
+
+
+def test_landing_back_to_tracking_when_the_supervisor_withdraws_permission():
+    f = landing_flight()
+    f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30), landing_allowed=False)
+    assert f.state == State.TRACKING and "no longer allowed" in f.lines[-1]
+
+
+def test_landing_stops_at_the_gate_height_instead_of_descending_blindly():
+    f = landing_flight(height=P.gate_height + 0.02)
+    out = f.step(drone=drone(height=P.gate_height + 0.02), pad=pad(f.t + 1 / 30, x=0.15))
+    assert out.command.vz == 0.0 and not out.send_land  # 0.15 m: outside the gate
+
+
+def test_touchdown_is_committed_only_after_gate_ready_time_inside_the_gate():
+    f = landing_flight(height=P.gate_height)
+    sends = [o.send_land for o in f.run(P.gate_ready_time - 0.05, make=fresh(x=0.05, height=P.gate_height))]
+    assert not any(sends)
+    outs = f.run(0.2, make=fresh(x=0.05, height=P.gate_height))
+    assert sum(o.send_land for o in outs) == 1
+    assert f.state == State.LANDING and f.sm.committed and "touchdown committed" in f.lines[-1]
+
+
+def test_touchdown_is_not_committed_while_the_relative_speed_is_large():
+    f = landing_flight(height=P.gate_height)
+    outs = f.run(1.0, make=fresh(x=0.02, vx=0.5, height=P.gate_height))   # pad 0.5 m/s faster than the drone
+    assert not any(o.send_land for o in outs)
+
+
+def test_gate_timeout_starts_a_retry():
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_timeout + 0.1, make=fresh(x=0.15, height=P.gate_height))
+    assert "not inside the touchdown gate" in f.lines[-1]
+    assert f.step(drone=drone(height=P.gate_height), pad=pad(f.t + 1 / 30)).command.vz == \
+        pytest.approx(P.retry_climb_rate)
+
+
+def committed_flight():
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    assert f.sm.committed
+    return f
+
+
+def test_committed_descent_keeps_tracking_horizontally_and_ignores_a_stale_prediction():
+    f = tracking_flight(auto_land=False)
+    moving = lambda t: {"drone": drone(x=t, height=P.gate_height, vx=1.0), "pad": pad(t, x=t, vx=1.0)}  # noqa: E731
+    f.run(1.0, make=moving)
+    f.step(land=True, **moving(f.t + 1 / 30))
+    f.run(P.gate_ready_time + 0.2, make=moving)
+    assert f.sm.committed
+    last = pad(f.t, x=f.t, vx=1.0, age=0.0)  # the camera loses the pad this close: the prediction ages
+    outs = f.run(1.5, make=lambda t: {"drone": drone(x=t, height=0.2, vx=1.0), "pad": last},
+                 navdata_state=Nav.LANDING)
+    assert f.state == State.LANDING                      # no relocating while committed
+    assert outs[-1].command.vx == pytest.approx(1.0, abs=0.1) and outs[-1].command.vz == 0.0
+
+
+def test_committed_land_is_sent_again_when_not_acknowledged():
+    f = committed_flight()
+    outs = f.run(P.land_ack_timeout + 0.2, make=fresh(height=P.gate_height), navdata_state=Nav.FLYING)
+    assert sum(o.send_land for o in outs) == 1 and "sending it again" in f.lines[-1]
+
+
+def test_landing_to_landed_on_touchdown():
+    f = committed_flight()
+    f.step(drone=drone(height=0.1), pad=pad(f.t + 1 / 30), navdata_state=Nav.LANDING)
+    out = f.step(drone=drone(height=0.0), pad=pad(f.t + 1 / 30), navdata_state=Nav.LANDED)
+    assert out.state == State.LANDED and out.command is None
+    assert f.lines[-1] == "LANDING -> LANDED (touchdown: navdata reports LANDED)"
+
+
+def test_an_external_land_command_makes_the_tracker_follow_the_pad_down():
+    f = tracking_flight()
+    out = f.step(drone=drone(vx=1.0), pad=pad(f.t + 1 / 30, vx=1.0), navdata_state=Nav.LANDING)
+    assert out.state == State.LANDING and f.sm.committed and not out.send_land
+    assert out.command.vx == pytest.approx(1.0, abs=0.2)
+
+
+# ----- FORCE_LANDING and failures ----------------------------------------------------------------
+@pytest.mark.parametrize("start", ["taking_off", "tracking", "landing", "relocating"])
+def test_force_land_lands_where_it_is_from_every_airborne_state(start):
+    if start == "taking_off":
+        f = Flight()
+        f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+        f.step(drone=drone(height=1.0), navdata_state=Nav.TAKING_OFF)
+    elif start == "tracking":
+        f = tracking_flight()
+    elif start == "landing":
+        f = committed_flight()
+    else:
+        f = tracking_flight()
+        f.run(P.lost_timeout + 0.1, drone=drone(), pad=pad(f.t))
+    assert f.state.value == start.upper()
+    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30, vx=3.0), force_land=True)
+    assert out.state == State.FORCE_LANDING and out.send_land
+    assert (out.command.vx, out.command.vy, out.command.vz) == (0.0, 0.0, 0.0)
+    assert "force_land requested" in f.lines[-1]
+    f.step(drone=drone(height=0.5), navdata_state=Nav.LANDING)
+    out = f.step(drone=drone(height=0.0), navdata_state=Nav.LANDED)
+    assert out.state == State.LANDED
+
+
+def test_force_land_is_sent_again_until_acknowledged_and_ignored_on_the_ground():
+    f = tracking_flight()
+    f.step(drone=drone(), force_land=True)
+    outs = f.run(P.land_ack_timeout + 0.2, drone=drone(), navdata_state=Nav.HOVERING)
+    assert sum(o.send_land for o in outs) == 1
+    g = Flight()
+    out = g.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, force_land=True)
+    assert out.state == State.LANDED and not out.send_land and "ignored" in g.lines[-1]
+
+
+def test_force_land_right_after_take_off_waits_for_the_drone_to_report_landing():
+    f = Flight()
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, force_land=True)
+    assert f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED).state == State.FORCE_LANDING
+
+
+def test_crash_reported_by_navdata_ends_in_landed():
+    f = tracking_flight()
+    out = f.step(drone=drone(), pad=pad(f.t + 1 / 30), navdata_state=Nav.CRASHED)
+    assert out.state == State.LANDED and "CRASHED" in f.lines[-1]
+
+
+def test_without_an_estimate_the_drone_hovers_and_keeps_its_state():
+    f = tracking_flight()
+    out = f.step(drone=None, pad=pad(f.t + 1 / 30, vx=2.0))
+    assert out.state == State.TRACKING
+    assert (out.command.vx, out.command.vy, out.command.vz) == (0.0, 0.0, 0.0)
+
+
+def test_unknown_navdata_during_take_off_counts_as_not_acknowledged():
+    f = Flight()
+    f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    f.run(P.takeoff_timeout + 0.1, drone=drone(height=0.02), navdata_state=None)
+    assert f.state == State.LANDED
+
+
+def test_sonar_is_the_height_above_the_pad_only_right_above_it():
+    f = tracking_flight()
+    out = f.step(drone=drone(height=4.0, sonar=3.8), pad=pad(f.t + 1 / 30))
+    assert out.height == pytest.approx(3.8)
+    out = f.step(drone=drone(x=1.0, height=4.0, sonar=4.45), pad=pad(f.t + 1 / 30))   # sees the ground
+    assert out.height == pytest.approx(4.0)
+    out = f.step(drone=drone(height=4.0, sonar=math.inf), pad=pad(f.t + 1 / 30))
+    assert out.height == pytest.approx(4.0)

@@ -1,0 +1,57 @@
+#!/usr/bin/env python3
+"""rostest: the estimator and tracker nodes fly the simulated drone from the pad of the moving Summit
+XL back onto it, commanded through platform_tracking/command. Waits are on sim-time conditions; the
+wall clock only bounds them."""
+import math
+import time
+import unittest
+
+import rospy
+import rostest
+from landing_msgs.msg import Touchdown
+from nav_msgs.msg import Odometry
+from std_msgs.msg import String
+
+WALL_TIMEOUT = 300.0
+
+
+def wait_for(condition, what, timeout=WALL_TIMEOUT):
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline or rospy.is_shutdown():
+            raise AssertionError("timed out waiting for " + what)
+        time.sleep(0.05)
+
+
+class FlightTest(unittest.TestCase):
+    def test_take_off_track_and_land_on_the_moving_pad(self):
+        rospy.init_node("test_platform_tracking")
+        states, estimates, truth, touchdowns = [], [], {}, []
+        rospy.Subscriber("platform_tracking/state", String, lambda m: states.append(m.data))
+        rospy.Subscriber("ardrone/odom_estimate", Odometry, estimates.append, queue_size=200)
+        rospy.Subscriber("ardrone/ground_truth/state", Odometry, lambda m: truth.update(last=m))
+        rospy.Subscriber("ardrone/touchdown", Touchdown, touchdowns.append)
+        command = rospy.Publisher("platform_tracking/command", String, queue_size=1, latch=True)
+        wait_for(lambda: states and estimates and "last" in truth and rospy.get_time() > 1.0,
+                 "the tracker state, the estimate and 1 s of sim time")
+        self.assertEqual(states[0], "LANDED")
+        command.publish(String(data="takeoff"))
+        wait_for(lambda: touchdowns and "LANDED" in states[1:], "the touchdown")
+
+        self.assertEqual(states, ["LANDED", "TAKING_OFF", "TRACKING", "LANDING", "LANDED"])
+        touchdown = touchdowns[-1]
+        self.assertEqual(touchdown.surface, Touchdown.SURFACE_PAD)
+        self.assertFalse(touchdown.crashed)
+        self.assertLess(touchdown.pad_error, 0.15)
+        # The estimate: in world, at the IMU rate, close to the ground truth.
+        self.assertEqual(estimates[-1].header.frame_id, "world")
+        self.assertEqual(estimates[-1].child_frame_id, "ardrone/base_link")
+        stamps = [m.header.stamp.to_sec() for m in estimates]
+        span = stamps[-1] - stamps[0]
+        self.assertGreater(len(stamps) / span, 80.0)
+        e, g = estimates[-1].pose.pose.position, truth["last"].pose.pose.position
+        self.assertLess(math.hypot(e.x - g.x, e.y - g.y), 0.3)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("platform_tracking", "platform_tracking_flight", FlightTest)
