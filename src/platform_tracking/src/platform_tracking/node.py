@@ -341,6 +341,9 @@ class TrackingNode:
 
     def spin(self):
         wait_for_clock()
+        if self.params.autostart:
+            with self.lock:
+                self.requests.add("takeoff")
         rate = rospy.Rate(self.params.rate_hz)
         while not rospy.is_shutdown():
             self.step()

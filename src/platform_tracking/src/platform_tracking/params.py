@@ -116,6 +116,7 @@ class TrackingParams:
     relocate_height: float = spec(6.0, 0.5, 50.0, "m")
     # tracking -> landing
     auto_land: bool = spec(True)
+    autostart: bool = spec(False)
     min_tracking_time: float = spec(10.0, 0.0, 600.0, "s")
     settle_error: float = spec(0.3, 0.01, 10.0, "m")
     settle_time: float = spec(2.0, 0.0, 60.0, "s")
