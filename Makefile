@@ -54,8 +54,12 @@ build: deps
 test: build
 	bash tests/run_all.sh
 
+DEMO_SCENARIO ?= scenarios/summit_circle_1ms.yaml
 demo: build
-	source env.sh && rosrun mujoco_sim demo_flight
+	@echo "== demo: one headless landing on the moving Summit XL ($(DEMO_SCENARIO))"
+	source env.sh && rosrun interface run_scenario $(DEMO_SCENARIO) --out results/demo
+	source env.sh && rosrun interface analyze results/demo/flight.bag --out results/demo/report
+	@echo "== report: results/demo/report/report.md (plots beside it), bag: results/demo/flight.bag"
 
 bench: build
 	source env.sh && rosrun mujoco_sim bench_sim
