@@ -15,6 +15,7 @@ from . import scenario as scenario_mod
 from . import scoring
 
 SETTLE_AFTER_TOUCHDOWN_S = 1.0  # sim seconds the drone must rest before the outcome is read
+EMERGENCY_REPORT_WAIT_S = 4.0   # sim seconds to wait for emergency/position after an emergency touchdown
 
 
 def launch_arguments(s, bag_path):
@@ -125,8 +126,9 @@ class FlightMonitor:
             self.operator.publish(String(data=action))
             if action in ("landing", "takeoff"):
                 self.landing_start = self.landing_start or rospy.get_time()
-                # Without the supervisor in the graph, the landing mode is the tracker's own take-off.
-                self.tracker_command.publish(String(data="takeoff"))
+                if not self.s.get("_supervisor"):
+                    # Without the supervisor in the graph, the landing mode is the tracker's own take-off.
+                    self.tracker_command.publish(String(data="takeoff"))
             if action == "emergency":
                 self.emergency_ordered = True
         elif "set_param" in event:
@@ -146,7 +148,10 @@ class FlightMonitor:
                 self.apply(event)
             if self.touchdown is not None:
                 touchdown_time = self.touchdown.header.stamp.to_sec()
-                if self.touchdown.crashed or t >= touchdown_time + SETTLE_AFTER_TOUCHDOWN_S:
+                # After an emergency landing, wait for the coordinates the emergency module reports.
+                settle = EMERGENCY_REPORT_WAIT_S if self.emergency_ordered and self.emergency_position is None \
+                    else SETTLE_AFTER_TOUCHDOWN_S
+                if self.touchdown.crashed or t >= touchdown_time + settle:
                     return
             if t >= time_limit:
                 return
@@ -160,15 +165,17 @@ class FlightMonitor:
         return ((self.drone.x - self.pad.x) ** 2 + (self.drone.y - self.pad.y) ** 2) ** 0.5
 
 
-def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True):
+def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True):
     """Run one scenario; returns the result dict (also written to out_dir/result.json)."""
     s = scenario_mod.load(scenario_path)
     s["_needs_tracker"] = landing_stack
+    s["_supervisor"] = supervisor and landing_stack
     os.makedirs(out_dir, exist_ok=True)
     bag = os.path.abspath(os.path.join(out_dir, "flight.bag"))
     events = s["events"] if any("operator" in e for e in s["events"]) else \
         [{"at_s": 0.0, "operator": "landing"}] + s["events"]
-    launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower()] + launch_arguments(s, bag)
+    launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
+              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s, bag)
     wall_start = time.monotonic()
     wall_timeout = wall_timeout or max(300.0, 4.0 * s["time_limit_s"])
     result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path)}
@@ -223,9 +230,11 @@ def main(argv=None):
     parser.add_argument("--out", required=True, help="output directory")
     parser.add_argument("--wall-timeout", type=float, default=None, help="wall-clock limit [s]")
     parser.add_argument("--no-landing-stack", action="store_true", help="simulator and vehicle only")
+    parser.add_argument("--no-supervisor", action="store_true", help="landing stack without the supervisor")
     args = parser.parse_args(argv)
     try:
-        result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack)
+        result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack,
+                     supervisor=not args.no_supervisor)
     except scenario_mod.ScenarioError as err:
         print("run_scenario: %s" % err, file=sys.stderr)
         return 2
