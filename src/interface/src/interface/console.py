@@ -203,15 +203,18 @@ def main(argv=None):
     try:
         if interactive:
             from rich.live import Live
-            with Live(render_rich(model, node.refresh()), refresh_per_second=4, screen=False) as live:
+            with Live(render_rich(model, node.refresh()), refresh_per_second=4, screen=True) as live:
                 while model.screen != Screen.CLOSED and not rospy.is_shutdown():
                     time.sleep(args.period)
+                    sim_time = node.refresh()
                     with node.lock:
-                        live.update(render_rich(model, node.refresh()))
+                        live.update(render_rich(model, sim_time))
         else:
             last = None
             while model.screen != Screen.CLOSED and not rospy.is_shutdown():
-                lines = render_plain(model, node.refresh())
+                sim_time = node.refresh()
+                with node.lock:
+                    lines = render_plain(model, sim_time)
                 if lines[1:] != last:  # print on change only, so logs stay readable
                     print("\n".join(lines), flush=True)
                     last = lines[1:]
