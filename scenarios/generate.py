@@ -43,14 +43,16 @@ def suite():
             add("summit_%s_%gms" % (path, speed), path=path, speed=speed, radius=10.0 if path != "square" else 5.0,
                 description="Summit XL on a %s path at %g m/s" % (path, speed))
     # Repeated seeds of the common cases (the landing success rate is measured over these).
-    for path, speed in (("straight", 1.0), ("circle", 2.0), ("figure8", 1.0), ("random", 2.0)):
-        for repeat in range(1, 4):
+    for path, speed in (("straight", 1.0), ("circle", 2.0), ("figure8", 1.0), ("random", 2.0), ("square", 1.0),
+                        ("back_and_forth", 2.0), ("stop_and_go", 2.0)):
+        for repeat in range(1, 4 if path in ("straight", "circle", "figure8", "random") else 3):
             add("summit_%s_%gms_seed%d" % (path, speed, repeat), path=path, speed=speed,
                 description="repeat with another seed")
     # Car on a straight road and on a 50 m circle.
     for speed in (5.0, 10.0, 15.0):
-        add("car_straight_%gms" % speed, vehicle="car", path="straight", speed=speed, time_limit=150.0,
-            description="car on a straight road at %g m/s" % speed)
+        for repeat in range(2):
+            add("car_straight_%gms%s" % (speed, "_seed%d" % repeat if repeat else ""), vehicle="car", path="straight",
+                speed=speed, time_limit=150.0, description="car on a straight road at %g m/s" % speed)
     for speed in (5.0, 10.0):
         add("car_circle_r50_%gms" % speed, vehicle="car", path="circle", speed=speed, radius=50.0, time_limit=150.0,
             description="car on a 50 m circle at %g m/s" % speed)
@@ -85,6 +87,66 @@ def suite():
                                         ("car", "straight", 10.0, {"x": -30.0, "y": 5.0, "z": 8.0})):
         add("rendezvous_%s_%s_%gms" % (vehicle, path, speed), vehicle=vehicle, path=path, speed=speed, start=start,
             time_limit=180.0, description="drone starts 30 m away and must find the vehicle")
+    # Adverse conditions and operator choices: every flag of the supervisor, with the expected outcome.
+    emergency = lambda condition: {"outcome": "emergency_landed", "no_pad_landing": True,  # noqa: E731
+                                   "emergency_position_within_m": 1.0,
+                                   "decisions_include": [{"condition": condition, "action": "emergency_landing"}]}
+    stays = lambda condition, action: {"outcome": "timeout", "no_pad_landing": True,  # noqa: E731
+                                       "decisions_include": [{"condition": condition, "action": action}]}
+    lands_despite = lambda condition, action: dict(ON_PAD, decisions_include=[  # noqa: E731
+        {"condition": condition, "action": action}])
+    in_flight = lambda param, value, at_s=12.0: [{"at_s": at_s, "set_param": param, "value": value}]  # noqa: E731
+    add("adverse_battery_10_in_flight", path="circle", events=in_flight("drone_battery", 10),
+        expect=emergency("drone_battery_critical"), description="thesis test 4.2.2: battery 10 % => emergency")
+    add("adverse_battery_35_at_start", conditions={"drone_battery": 35}, time_limit=40.0,
+        expect=stays("drone_battery_landing", "no_go"), description="below 40 %: no take-off for a landing")
+    add("adverse_battery_35_in_flight_no_answer", path="circle", events=in_flight("drone_battery", 35),
+        expect=emergency("drone_battery_landing"), description="no-go warning unanswered => emergency landing")
+    add("adverse_battery_35_in_flight_continue", path="circle", time_limit=60.0,
+        events=in_flight("drone_battery", 35) + [{"at_s": 14.0, "operator": "continue"}],
+        expect=stays("drone_battery_landing", "warn"), description="operator continues: no landing on the pad")
+    add("adverse_wind_13_at_start", conditions={"wind_speed": 13.0}, time_limit=40.0,
+        expect=stays("wind_critical", "no_go"), description="critical wind: no take-off")
+    add("adverse_wind_13_in_flight", path="circle", events=in_flight("wind_speed", 13.0),
+        expect=emergency("wind_critical"), description="critical wind in flight: Flag #1")
+    add("adverse_wind_9_persists", path="circle", events=in_flight("wind_speed", 9.0),
+        expect=emergency("wind_strong"), description="Flag #3: three re-checks, still windy => emergency")
+    add("adverse_wind_9_clears", path="circle",
+        events=in_flight("wind_speed", 9.0) + in_flight("wind_speed", 3.0, at_s=15.0),
+        expect=lands_despite("wind_strong", "continue"), description="Flag #3: clears before the third check")
+    add("adverse_cold_0", path="circle", conditions={"temp": 0.0},
+        expect=lands_despite("temp_cold", "warn"), description="Flag #2: warn and go on")
+    add("adverse_temp_minus_15_in_flight", path="circle", events=in_flight("temp", -15.0),
+        expect=emergency("temp_out_of_range"), description="outside the operating range: Flag #1")
+    add("adverse_control_battery_15", path="circle", conditions={"control_battery": 15},
+        expect=lands_despite("control_battery_low", "warn"), description="controller battery low: Flag #2")
+    add("adverse_control_battery_3_in_flight", path="circle", events=in_flight("control_battery", 3),
+        expect=emergency("control_battery_critical"), description="controller battery critical: Flag #1")
+    add("adverse_drone_speed_18", path="circle", conditions={"drone_speed": 18.0},
+        expect=lands_despite("drone_speed_high", "warn"), description="drone near its maximum speed: Flag #2")
+    add("adverse_car_20ms_too_fast", vehicle="car", path="straight", speed=20.0, time_limit=90.0,
+        expect={"outcome": ["emergency_landed", "timeout"], "no_pad_landing": True,
+                "decisions_include": [{"condition": "platform_too_fast", "action": "warn"}]},
+        description="platform faster than the drone can safely land on: no-go")
+    add("adverse_camera_lost_10s", path="circle",
+        events=[{"at_s": 12.0, "fault": "camera_blackout", "duration_s": 10.0}],
+        expect=emergency("camera_missing"), description="camera silent: Flag #3 re-checks, then emergency")
+    add("adverse_battery_unreadable", path="circle", events=in_flight("drone_battery", "abc"),
+        expect={"outcome": "emergency_landed", "no_pad_landing": True}, description="'abc' is treated as unsafe")
+    add("adverse_wind_negative", path="circle", events=in_flight("wind_speed", -5.0),
+        expect={"outcome": "emergency_landed", "no_pad_landing": True}, description="-5 m/s is treated as unsafe")
+    add("operator_emergency", path="circle", events=[{"at_s": 12.0, "operator": "emergency"}],
+        expect=emergency("operator"), description="thesis test 4.2.2: emergency from the menu")
+    add("operator_manual", path="circle", time_limit=40.0, events=[{"at_s": 12.0, "operator": "manual"}],
+        expect={"outcome": "timeout", "no_pad_landing": True}, description="the operator takes over (and hovers)")
+    add("fault_detector_killed", path="circle",
+        events=[{"at_s": 12.0, "fault": "kill_node", "name": "platform_detection"}],
+        description="the detector dies and respawns; the tracker never flies blind")
+    items.append(scenario("idle_auto_takeoff", seed=seed + 1, path="circle", time_limit=150.0,
+                          expect=dict(ON_PAD, decisions_include=[{"condition": "idle", "action": "takeoff"}]),
+                          description="no operator choice for 30 s: the drone takes off by itself"))
+    items[-1]["events"] = []
+    items[-1]["supervisor"] = {"no_operator": True}
     return items
 
 

@@ -172,7 +172,10 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     s["_supervisor"] = supervisor and landing_stack
     os.makedirs(out_dir, exist_ok=True)
     bag = os.path.abspath(os.path.join(out_dir, "flight.bag"))
-    events = s["events"] if any("operator" in e for e in s["events"]) else \
+    # Without an operator event the operator chooses the landing mode at once, unless the scenario tests
+    # what happens when nobody chooses (supervisor: {no_operator: true}).
+    no_operator = bool(s["supervisor"].get("no_operator"))
+    events = s["events"] if no_operator or any("operator" in e for e in s["events"]) else \
         [{"at_s": 0.0, "operator": "landing"}] + s["events"]
     launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
               "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s, bag)
