@@ -74,7 +74,8 @@ class ConsoleNode:
         self.rospy, self.model, self.plain = rospy, model, plain
         self.lock = threading.Lock()
         self.last_seen = {}
-        self.publisher = rospy.Publisher("operator/command", String, queue_size=10)
+        # synchronous (no queue): a command is on the wire when publish returns, even if we quit next
+        self.publisher = rospy.Publisher("operator/command", String, queue_size=None)
         rospy.Subscriber("supervisor/mode", String, lambda m: self._set(mode=m.data))
         rospy.Subscriber("platform_tracking/state", String, lambda m: self._set(tracker_state=m.data))
         rospy.Subscriber("supervisor/decisions", String, self._on_decision)
@@ -138,6 +139,23 @@ class ConsoleNode:
                 self.model.set_sensor(name, seen is not None and now - seen <= SENSOR_TIMEOUT_S)
         return now
 
+    def wait_for_listeners(self, timeout_s=5.0):
+        """Wait (wall time) until every subscriber the master knows of is connected, so scripted
+        commands sent right after start are not lost; gives up quietly when nobody listens."""
+        import rosgraph
+        master = rosgraph.Master(self.rospy.get_name())
+        topic = self.publisher.resolved_name
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            try:
+                _, subscribers, _ = master.getSystemState()
+            except Exception:  # master busy or gone: do not block the console on it
+                return
+            expected = sum(len(nodes) for name, nodes in subscribers if name == topic)
+            if self.publisher.get_num_connections() >= expected:
+                return
+            time.sleep(0.05)
+
     def command(self, text):
         from std_msgs.msg import String
         with self.lock:
@@ -159,9 +177,12 @@ def _read_keys(on_key, stop):
     try:
         tty.setcbreak(fd)
         while not stop.is_set():
-            ready, _, _ = select.select([sys.stdin], [], [], 0.2)
+            ready, _, _ = select.select([fd], [], [], 0.2)
             if ready:
-                on_key(sys.stdin.read(1))
+                # os.read, not sys.stdin.read(1): keys typed quickly arrive together and the rest
+                # would wait in Python's buffer where select() cannot see them
+                for key in os.read(fd, 1024).decode(errors="replace"):
+                    on_key(key)
     finally:
         termios.tcsetattr(fd, termios.TCSADRAIN, saved)
 
@@ -188,6 +209,8 @@ def main(argv=None):
     stop = threading.Event()
 
     def run_script():
+        if args.commands:
+            node.wait_for_listeners()
         for item in filter(None, (c.strip() for c in args.commands.split(";"))):
             if item.startswith("wait"):
                 end = rospy.get_time() + float(item.split()[1])

@@ -1,0 +1,138 @@
+"""The operator console driven as a person would: keys through a pseudo-terminal, and as a script would:
+--commands with no terminal; both against a real roscore, checked on operator/command."""
+import os
+import pty
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+PACKAGE = os.path.dirname(HERE)
+CONSOLE = os.path.join(PACKAGE, "scripts", "console")
+TIMEOUT = 60.0  # [s] generous: Python + rospy start slowly on a loaded 2-core machine
+
+
+def free_port():
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def wait_for(condition, what, timeout=TIMEOUT):
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
+        time.sleep(0.05)
+
+
+def stop(process):
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGINT)
+        try:
+            process.wait(timeout=TIMEOUT)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+class Lines:
+    """Non-blocking reader of a file descriptor into one growing text."""
+
+    def __init__(self, fd):
+        self.fd, self.text = fd, ""
+        os.set_blocking(fd, False)
+
+    def read(self):
+        try:
+            while True:
+                chunk = os.read(self.fd, 65536)
+                if not chunk:
+                    break
+                self.text += chunk.decode(errors="replace")
+        except (BlockingIOError, OSError):
+            pass
+        return self.text
+
+
+@pytest.fixture(scope="module")
+def ros_env(tmp_path_factory):
+    logs = tmp_path_factory.mktemp("ros")
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1",
+               ROS_LOG_DIR=str(logs), PYTHONPATH=os.pathsep.join(
+                   [os.path.join(PACKAGE, "src")] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
+    env.pop("ROS_IP", None)
+    core = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        import rosgraph
+        master = rosgraph.Master("/console_test", master_uri=env["ROS_MASTER_URI"])
+
+        def up():
+            try:
+                return master.getPid() > 0
+            except Exception:  # not listening yet
+                return False
+        wait_for(up, "roscore on port %d" % port)
+        yield env
+    finally:
+        stop(core)
+
+
+@pytest.fixture
+def operator_commands(ros_env):
+    """What reaches operator/command, one line per command."""
+    # a typed subscriber (rostopic echo would wait for a publisher to learn the type, and miss the first ones)
+    listener = ("import rospy; from std_msgs.msg import String; rospy.init_node('command_listener', anonymous=True); "
+                "rospy.Subscriber('/operator/command', String, lambda m: print(m.data, flush=True)); rospy.spin()")
+    echo = subprocess.Popen([sys.executable, "-c", listener], env=ros_env, stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, start_new_session=True)
+    reader = Lines(echo.stdout.fileno())
+    yield reader
+    stop(echo)
+
+
+def test_keys_in_a_terminal_open_flight_management_and_choose_the_landing_mode(ros_env, operator_commands):
+    master, slave = pty.openpty()
+    env = dict(ros_env, TERM="xterm-256color", COLUMNS="120", LINES="40")
+    console = subprocess.Popen([sys.executable, CONSOLE], env=env, stdin=slave, stdout=slave, stderr=slave,
+                               start_new_session=True)
+    os.close(slave)
+    screen = Lines(master)
+    try:
+        wait_for(lambda: "Start" in screen.read() and "Quit" in screen.text, "the Start menu on the terminal")
+        os.write(master, b"l")
+        wait_for(lambda: "press s (Start) first" in screen.read(), "the console to ask for Start first")
+        os.write(master, b"s")
+        wait_for(lambda: "Flight Management" in screen.read(), "the Flight Management panel")
+        wait_for(lambda: "Drone battery charge" in screen.read(), "the condition rows")
+        # the listener may still be connecting: repeat the key until it hears one
+        wait_for(lambda: (os.write(master, b"l"), screen.read(), "landing" in operator_commands.read())[2],
+                 "operator/command landing after the key l")
+        os.write(master, b"lq")  # typed quickly: both keys arrive in one read
+        # keep draining the terminal: a full pty buffer would block the console's last redraw
+        wait_for(lambda: (screen.read(), console.poll() is not None)[1], "the console to close on q")
+        assert console.returncode == 0
+        wait_for(lambda: "quit" in operator_commands.read(), "operator/command quit after the key q")
+    finally:
+        stop(console)
+        os.close(master)
+
+
+def test_commands_as_arguments_without_a_terminal(ros_env, operator_commands):
+    wait_for(lambda: subprocess.run(["rostopic", "info", "/operator/command"], env=ros_env,
+                                    capture_output=True, text=True).stdout.count("command_listener") > 0,
+             "the listener to subscribe")
+    result = subprocess.run([sys.executable, CONSOLE, "--plain", "--commands", "start;emergency;dance;quit"],
+                            env=dict(ros_env, CONSOLE_NO_STDIN="1"), stdin=subprocess.DEVNULL, capture_output=True,
+                            text=True, timeout=TIMEOUT)
+    assert result.returncode == 0, result.stderr
+    assert "unknown command 'dance'" in result.stdout
+    wait_for(lambda: "emergency" in operator_commands.read() and "quit" in operator_commands.text,
+             "emergency and quit on operator/command")
+    assert "dance" not in operator_commands.text
