@@ -1,0 +1,44 @@
+"""One short benchmark run, for real: `rosrun interface benchmark` on a small directory with a thesis
+scenario (battery 10 % in flight: emergency landing with coordinates) and a file with a typo. Each
+scenario gets its own master and simulator; the bad file must come out as an error row, never a success."""
+import csv
+import os
+import subprocess
+
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+WALL_TIMEOUT_S = 600  # whole run; a loaded 2-core machine needs about 1 min
+
+
+def test_short_benchmark_run_scores_the_good_scenario_and_marks_the_bad_one(tmp_path):
+    suite = tmp_path / "suite"
+    suite.mkdir()
+    with open(os.path.join(ROOT, "scenarios", "adverse_battery_10_in_flight.yaml")) as stream:
+        good = yaml.safe_load(stream)
+    # the same thesis test, made short: the battery drops soon after take-off
+    good.update(name="short_battery_10", time_limit_s=40.0)
+    good["events"] = [{"at_s": 0, "operator": "landing"}, {"at_s": 6.0, "set_param": "drone_battery", "value": 10}]
+    (suite / "short_battery_10.yaml").write_text(yaml.safe_dump(good))
+    (suite / "typo.yaml").write_text("name: typo\nplatfrom: {vehicle: summit_xl}\n")
+
+    out = tmp_path / "out"
+    run = subprocess.run(["rosrun", "interface", "benchmark", str(suite), "--out", str(out), "--jobs", "2"],
+                         capture_output=True, text=True, timeout=WALL_TIMEOUT_S, stdin=subprocess.DEVNULL)
+    assert run.returncode == 1, "one scenario is bad, so the benchmark must fail:\n" + run.stdout + run.stderr
+
+    with open(out / "results.csv") as stream:
+        rows = {row["name"]: row for row in csv.DictReader(stream)}
+    assert set(rows) == {"short_battery_10", "typo"}, rows
+    good_row, bad_row = rows["short_battery_10"], rows["typo"]
+    assert good_row["outcome"] == "emergency_landed", good_row
+    assert good_row["passed"] == "True", good_row
+    assert float(good_row["real_time_factor"]) > 0
+    assert bad_row["outcome"] == "error" and bad_row["passed"] == "False"
+    assert "typo.yaml" in bad_row["error"] and "platfrom" in bad_row["error"], bad_row["error"]
+
+    summary = (out / "summary.md").read_text()
+    assert "| **all** | 1/2 |" in summary, summary
+    assert "- `typo`: error" in summary
+    assert (out / "short_battery_10" / "result.json").is_file()
+    assert any(name.endswith(".bag") for name in os.listdir(out / "short_battery_10"))
