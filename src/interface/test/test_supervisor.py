@@ -130,6 +130,21 @@ def test_flag1_on_the_pad_refuses_the_take_off_instead(h):
     assert not accepted and "battery" in message and h.sup.mode is Mode.IDLE
 
 
+def test_landing_chosen_before_the_first_reading_waits_for_it(h):
+    # the operator's "landing" at t=0 reaches the node before its first condition check
+    accepted, message = h.command("landing")
+    assert accepted and "waits for the first reading" in message and h.sup.mode is Mode.IDLE
+    h.tick(wind_speed=13.0)
+    assert h.sup.mode is Mode.IDLE and "takeoff" not in h.tracker
+    assert h.decisions[-1]["condition"] == "takeoff" and h.decisions[-1]["action"] == "no_go"
+
+
+def test_landing_chosen_before_the_first_reading_starts_once_it_is_clear(h):
+    h.command("landing")
+    h.tick()
+    assert h.sup.mode is Mode.LANDING and h.tracker == ["takeoff"]
+
+
 def test_flag1_while_hovering_without_a_mission_lands(h):
     h.flight = Flight.AIRBORNE   # a scenario may start the drone in the air
     h.tick()
@@ -192,7 +207,7 @@ def test_flag3_recheck_interval_and_count_are_settings():
 # ----- go / no-go with reasons -------------------------------------------------------------------------
 @pytest.mark.parametrize("change, row, reason_text", [
     ({"wind_speed": 9.0}, "wind_strong", "weather"),
-    ({"platform_speed": 13.0}, "platform_too_fast", "platform too fast for the drone"),
+    ({"platform_speed": 18.0}, "platform_too_fast", "platform too fast for the drone"),
     ({"target_lost_s": 6.0}, "target_lost", "target lost"),
     ({"drone_battery": 39.0}, "drone_battery_landing", "battery"),
     ({"camera_silence_s": 1.5}, "camera_missing", "sensor missing"),
@@ -213,11 +228,11 @@ def test_no_go_during_the_landing_says_why_and_go_when_it_clears(flying, change,
 
 
 def test_no_go_before_the_take_off_says_why(h):
-    h.tick(platform_speed=15.0)
+    h.tick(platform_speed=20.0)
     accepted, message = h.command("landing")
     assert not accepted and h.sup.mode is Mode.IDLE
     assert message == "take-off refused: platform too fast for the drone: platform_too_fast " \
-                      "(platform_speed 15 m/s > 12 m/s)"
+                      "(platform_speed 20 m/s > 17 m/s)"
     assert h.decisions[-1]["action"] == "no_go" and h.decisions[-1]["condition"] == "takeoff"
 
 
@@ -240,7 +255,7 @@ def test_battery_40_percent_is_enough_for_the_landing(flying):
 # ----- the warning the operator answers -----------------------------------------------------------------
 def test_unanswered_no_go_warning_lands_on_the_ground_after_the_answer_timeout(flying):
     start = flying.t + 0.1
-    flying.run(0.1, platform_speed=14.0)
+    flying.run(0.1, platform_speed=19.0)
     warning = flying.sup.warning
     assert warning["deadline"] == pytest.approx(start + 15.0) and warning["default"] == "emergency"
     flying.run(14.8)

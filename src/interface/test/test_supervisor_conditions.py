@@ -33,7 +33,7 @@ def test_shipped_table_has_the_thesis_defaults(table):
     assert table.row("drone_battery_critical").flag == 1
     assert table.row("drone_battery_landing").thresholds == {"below": 40.0}
     assert table.row("drone_battery_landing").blocks_landing
-    assert table.row("platform_too_fast").thresholds["above"] == pytest.approx(0.6 * table.drone_max_horizontal_speed)
+    assert table.row("platform_too_fast").thresholds["above"] == pytest.approx(0.85 * table.drone_max_horizontal_speed)
     assert table.sensor_timeout_s == 1.0
     assert table.params() == ["wind_speed", "drone_battery", "temp", "control_battery", "drone_speed"]
 
@@ -154,15 +154,17 @@ def test_sensor_watchdog_counts_from_start_and_from_the_last_message():
     assert watchdog.silence("imu", 11.5) == pytest.approx(1.0)
 
 
-def test_platform_speed_prefers_the_kalman_filter_then_falls_back_to_gps():
+def test_platform_speed_prefers_the_vehicle_report_then_falls_back_to_the_kalman_filter():
     speed = PlatformSpeed(filtered_timeout_s=1.0, window_s=1.0)
     assert speed.value(0.0) is MISSING
     for i in range(6):
         speed.on_gps(i * 0.2, 3.0 + (0.1 if i % 2 else -0.1), 4.0)
+    speed.on_filtered(1.0, 0.0, 24.0)        # a jump of the filter while it acquires the pad
     assert speed.value(1.0) == pytest.approx(5.0, abs=0.05) and speed.source(1.0) == "summit_xl/gps/odom"
-    speed.on_filtered(1.0, 0.0, 12.5)
-    assert speed.value(1.5) == 12.5 and speed.source(1.5) == "kalman_platform_odom"
-    assert speed.value(2.1) is MISSING      # neither source is fresh any more
+    for i in range(6):                       # the vehicle's report stops: the filter, averaged
+        speed.on_filtered(1.5 + i * 0.2, 0.0, 12.0 + (1.0 if i % 2 else -1.0))
+    assert speed.value(2.5) == pytest.approx(12.0, abs=0.2) and speed.source(2.5) == "kalman_platform_odom"
+    assert speed.value(3.6) is MISSING      # neither source is fresh any more
 
 
 def test_target_lost_timer_counts_the_relocating_time():

@@ -135,6 +135,7 @@ class Supervisor:
         self._reported_takeoff_nogo = None
         self._warning_rows, self._warning_id = None, 0
         self._decisions, self._tracker_commands = [], []
+        self._before_first_tick = []     # operator commands that came before any condition was read
 
     # ----- outputs ---------------------------------------------------------------------------------
     def take_outputs(self):
@@ -205,6 +206,9 @@ class Supervisor:
                 self._follow_up(t, state)
             else:
                 state.evaluation = evaluation
+        waiting, self._before_first_tick = self._before_first_tick, []
+        for word in waiting:
+            self.command(t, word)
         self._auto_takeoff(t)
         self._update_landing_allowed(t)
         self._update_warning()
@@ -399,6 +403,10 @@ class Supervisor:
             message = "ignored %r: the supervisor has quit; restart the launch to fly again" % word
             self._decide(t, "operator", None, "ignored", message, word)
             return False, message
+        if self._idle_since is None:
+            # nothing evaluated yet: a "go" now would ignore a condition that is already there
+            self._before_first_tick.append(word)
+            return True, "%r waits for the first reading of the conditions" % word
         if self.mode is Mode.IDLE and word != "ack":
             self._operator_chose = True
         accepted, message = getattr(self, "_on_" + word)(t)

@@ -38,34 +38,47 @@ class SensorWatchdog:
 
 
 class PlatformSpeed:
-    """Ground speed of the pad: the Kalman filter's estimate while it is fresh, else the vehicle's own
-    GPS velocity averaged over ``window_s`` (its 0.1 m/s noise would otherwise flicker a threshold)."""
+    """Ground speed of the pad: the vehicle's own reported GPS velocity while it is fresh, else the
+    Kalman filter's estimate; each averaged over ``window_s``. The vehicle's report comes first because
+    the filter's estimate jumps while it acquires or loses the pad (a 15 m/s car read as 24 m/s), and
+    a single jump must not call the landing off."""
+
+    SOURCES = (("gps", "summit_xl/gps/odom"), ("filtered", "kalman_platform_odom"))
 
     def __init__(self, filtered_timeout_s=1.0, window_s=1.0, gps_timeout_s=1.0):
-        self.filtered_timeout_s, self.window_s, self.gps_timeout_s = filtered_timeout_s, window_s, gps_timeout_s
-        self.filtered = None  # (t, speed)
-        self.gps = collections.deque()
+        self.window_s = window_s
+        self.timeouts = {"filtered": filtered_timeout_s, "gps": gps_timeout_s}
+        self.samples = {"filtered": collections.deque(), "gps": collections.deque()}
+
+    def _add(self, kind, t, vx, vy):
+        samples = self.samples[kind]
+        samples.append((t, math.hypot(vx, vy)))
+        while samples and samples[0][0] < t - self.window_s:
+            samples.popleft()
 
     def on_filtered(self, t, vx, vy):
-        self.filtered = (t, math.hypot(vx, vy))
+        self._add("filtered", t, vx, vy)
 
     def on_gps(self, t, vx, vy):
-        self.gps.append((t, math.hypot(vx, vy)))
-        while self.gps and self.gps[0][0] < t - self.window_s:
-            self.gps.popleft()
+        self._add("gps", t, vx, vy)
+
+    def _fresh(self, t):
+        for kind, topic in self.SOURCES:
+            samples = self.samples[kind]
+            if samples and t - samples[-1][0] <= self.timeouts[kind]:
+                return kind, topic
+        return None, None
 
     def value(self, t):
-        if self.filtered is not None and t - self.filtered[0] <= self.filtered_timeout_s:
-            return self.filtered[1]
-        if self.gps and t - self.gps[-1][0] <= self.gps_timeout_s:
-            recent = [speed for stamp, speed in self.gps if stamp >= t - self.window_s] or [self.gps[-1][1]]
-            return sum(recent) / len(recent)
-        return MISSING
+        kind, _ = self._fresh(t)
+        if kind is None:
+            return MISSING
+        samples = self.samples[kind]
+        recent = [speed for stamp, speed in samples if stamp >= t - self.window_s] or [samples[-1][1]]
+        return sum(recent) / len(recent)
 
     def source(self, t):
-        if self.filtered is not None and t - self.filtered[0] <= self.filtered_timeout_s:
-            return "kalman_platform_odom"
-        return "summit_xl/gps/odom" if self.gps and t - self.gps[-1][0] <= self.gps_timeout_s else None
+        return self._fresh(t)[1]
 
 
 class TargetLostTimer:
