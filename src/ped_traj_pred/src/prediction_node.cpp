@@ -112,6 +112,7 @@ PredictionNode::PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
   detection_sub_ = nh.subscribe(pose_topic, 30, &PredictionNode::onDetection, this, ros::TransportHints().tcpNoDelay());
   if (!gps_topic.empty())
     gps_sub_ = nh.subscribe(gps_topic, 10, &PredictionNode::onGps, this, ros::TransportHints().tcpNoDelay());
+  lockstep_.emplace(nh, ros::Duration(1.0 / pub_freq_));
   timer_ = nh.createTimer(ros::Duration(1.0 / pub_freq_), &PredictionNode::onTimer, this);
   ROS_INFO("Predicting the pad from %s%s%s: %s (nav_msgs/Path, %.1f s ahead every %.2f s) and %s at %.1f Hz",
            detection_sub_.getTopic().c_str(), gps_topic.empty() ? "" : " and ",
@@ -200,7 +201,12 @@ void PredictionNode::onTimer(const ros::TimerEvent&)
     filter_.reset();
   }
   last_tick_ = now;
+  step(now);
+  lockstep_->ack(now);
+}
 
+void PredictionNode::step(const ros::Time& now)
+{
   const bool tracking = filter_.isTracking(now.toSec());
   if (tracking != tracking_)
   {

@@ -213,3 +213,20 @@ def test_flow_timeout_falls_back_to_gps_velocity_then_holds():
     assert est.estimate(0.7).velocity[:2] == pytest.approx((0.0, 2.0), abs=0.05)
     est.imu(2.0, (1.0, 0.0, 0.0, 0.0))                       # everything stale: hold
     assert est.estimate(2.0).velocity[:2] == pytest.approx((0.0, 0.0), abs=0.05)
+
+
+def test_an_estimate_asked_for_a_time_the_filter_has_passed_is_moved_back():
+    """Sensors arrive on separate threads: the flow of t + 10 ms may be processed before the IMU of t.
+    The estimate for t must then be the state of t, not that of t + 10 ms (15 cm at 15 m/s)."""
+    speed = 15.0
+    est = DroneEstimator(EstimatorParams())
+    est.imu(0.0, yaw_quaternion(0.0))
+    est.gps(0.0, (0.0, 0.0, 5.0))
+    est.altimeter(0.0, 5.0)
+    est.flow(0.0, speed, 0.0, 0.0)
+    est.flow(1.0, speed, 0.0, 0.0)
+    ahead = est.estimate()
+    assert ahead.time == 1.0 and ahead.position[0] == pytest.approx(speed, abs=1e-6)
+    behind = est.estimate(0.99)
+    assert behind.time == 0.99
+    assert behind.position[0] == pytest.approx(speed * 0.99, abs=1e-6)

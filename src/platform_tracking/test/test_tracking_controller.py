@@ -143,3 +143,11 @@ def test_malformed_paths_are_rejected():
         PadPrediction(0.0, (0, 0, 0), (0, 0, 0), [0.0, 1.0], [(0, 0, 0)])
     with pytest.raises(ValueError, match="must not decrease"):
         PadPrediction(0.0, (0, 0, 0), (0, 0, 0), [1.0, 0.0], [(0, 0, 0), (1, 0, 0)])
+
+
+def test_a_drone_state_is_moved_to_the_time_it_is_compared_at():
+    state = DroneState(np.array([1.0, 2.0, 3.0]), np.array([10.0, -5.0, 0.5]), 0.3, sonar_height=1.0)
+    later = state.moved(0.05)
+    assert later.position == pytest.approx([1.5, 1.75, 3.025])
+    assert later.velocity is state.velocity and later.yaw == 0.3 and later.sonar_height == 1.0
+    assert state.position == pytest.approx([1.0, 2.0, 3.0])  # the original is left alone

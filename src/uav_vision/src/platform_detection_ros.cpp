@@ -101,7 +101,8 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
 PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle pnh)
     : config_(PlatformDetectionConfig::load(pnh)),
       localizer_(config_.localizer, CameraMount::bottomCamera(config_.localizer.height.camera_below_base_link)),
-      image_transport_(nh) {
+      image_transport_(nh),
+      lockstep_(nh, "ardrone/bottom/image_raw") {
   platform_in_base_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_ardrone", 10);
   platform_in_world_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_world", 10);
   indicator_in_base_pub_ =
@@ -181,7 +182,30 @@ void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg)
                       odom_sub_.getTopic().c_str(), msg->header.frame_id.c_str(), config_.world_frame.c_str());
     return;
   }
-  odom_estimate_ = msg;
+  const auto& v = msg->twist.twist.linear;
+  const Eigen::Vector3d velocity =
+      std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) ? Eigen::Vector3d(v.x, v.y, v.z)
+                                                                     : Eigen::Vector3d::Zero();
+  const ros::Time stamp = msg->header.stamp;
+  if (!estimates_.empty() && stamp < estimates_.back().stamp) estimates_.clear();  // time jumped back
+  estimates_.push_back({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity});
+  while ((stamp - estimates_.front().stamp).toSec() > 1.0) estimates_.pop_front();
+}
+
+std::optional<Eigen::Vector3d> PlatformDetectionRos::dronePositionAt(const ros::Time& stamp) const {
+  if (estimates_.empty()) return std::nullopt;
+  const auto later = std::lower_bound(estimates_.begin(), estimates_.end(), stamp,
+                                      [](const PositionEstimate& e, const ros::Time& t) { return e.stamp < t; });
+  if (later != estimates_.end() && later != estimates_.begin()) {
+    const auto& a = *std::prev(later);
+    const double span = (later->stamp - a.stamp).toSec();
+    const double f = span > 0.0 ? (stamp - a.stamp).toSec() / span : 0.0;
+    return a.position + f * (later->position - a.position);
+  }
+  const PositionEstimate& nearest = later == estimates_.end() ? estimates_.back() : *later;
+  const double offset = (stamp - nearest.stamp).toSec();
+  if (std::abs(offset) > config_.odom_timeout) return std::nullopt;
+  return nearest.position + offset * nearest.velocity;
 }
 
 std::optional<Eigen::Quaterniond> PlatformDetectionRos::attitudeAt(const ros::Time& stamp) const {
@@ -209,6 +233,11 @@ double PlatformDetectionRos::freshValue(const std::optional<std::pair<ros::Time,
 }
 
 void PlatformDetectionRos::onImage(const sensor_msgs::ImageConstPtr& msg) {
+  processImage(msg);
+  lockstep_.ack(msg->header.stamp);  // processed or dropped: either way the simulator may go on
+}
+
+void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
   namespace enc = sensor_msgs::image_encodings;
   const double period = config_.warn_period;
   const std::string topic_name = image_sub_.getTopic();
@@ -271,17 +300,14 @@ void PlatformDetectionRos::publish(const std_msgs::Header& image_header, const P
   platform_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.centre_in_body));
   if (observation.strip_found)
     indicator_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.strip_in_body));
-  const bool odom_fresh =
-      odom_estimate_ && std::abs((image_header.stamp - odom_estimate_->header.stamp).toSec()) <= config_.odom_timeout;
-  if (!odom_fresh) {
+  const std::optional<Eigen::Vector3d> drone = dronePositionAt(image_header.stamp);
+  if (!drone) {
     ROS_WARN_THROTTLE(config_.warn_period, "no %s within %.2f s of the frame: publishing the relative pad position only",
                       odom_sub_.getTopic().c_str(), config_.odom_timeout);
     return;
   }
   // The estimate's own orientation is not needed: the IMU attitude already turned the vector to world axes.
-  const auto& p = odom_estimate_->pose.pose.position;
-  platform_in_world_pub_.publish(
-      pointMsg(image_header, config_.world_frame, Eigen::Vector3d(p.x, p.y, p.z) + observation.centre_world_aligned));
+  platform_in_world_pub_.publish(pointMsg(image_header, config_.world_frame, *drone + observation.centre_world_aligned));
 }
 
 void PlatformDetectionRos::publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image,

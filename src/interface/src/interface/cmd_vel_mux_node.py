@@ -4,6 +4,7 @@ import sys
 
 import rospy
 from geometry_msgs.msg import Twist
+from landing_msgs.lockstep import LockstepAcker
 from std_msgs.msg import String
 
 from .cmd_vel_mux import CommandSelector
@@ -29,6 +30,7 @@ class MuxNode:
             rospy.Subscriber(topic, Twist, self._input(name), queue_size=1)
         rospy.Subscriber("supervisor/mode", String, self._on_mode, queue_size=5)
         self.pub_selected.publish(String(data="none"))
+        self.lockstep = LockstepAcker(period=1.0 / self.rate_hz)
 
     def _input(self, name):
         def callback(msg):
@@ -41,7 +43,8 @@ class MuxNode:
             rospy.logwarn("cmd_vel_mux: %s", complaint)
 
     def tick(self):
-        choice = self.selector.select(rospy.get_time())
+        now = rospy.Time.now()
+        choice = self.selector.select(now.to_sec())
         name = choice[0] if choice else None
         if name != self.selected:
             rospy.loginfo("cmd_vel_mux: ardrone/cmd_vel %s (mode %s)",
@@ -50,6 +53,7 @@ class MuxNode:
             self.selected = name
         if choice:
             self.pub.publish(choice[1])
+        self.lockstep.ack(now)
 
     def spin(self):
         rate = rospy.Rate(self.rate_hz)  # sim time

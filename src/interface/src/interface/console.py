@@ -13,7 +13,7 @@ import tty
 
 from .console_model import PANEL, ConsoleModel, Screen
 
-SENSOR_TOPICS = {"camera": "ardrone/bottom/image_raw", "imu": "ardrone/imu", "odometry": "ardrone/gps/odom",
+SENSOR_TOPICS = {"camera": "ardrone/bottom/camera_info", "imu": "ardrone/imu", "odometry": "ardrone/gps/odom",
                  "sonar": "ardrone/sonar_height"}
 SENSOR_TIMEOUT_S = 1.0  # a sensor silent for longer (sim time) is shown as missing
 

@@ -10,6 +10,7 @@ import threading
 
 import rospy
 from geometry_msgs.msg import PointStamped, Twist
+from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
@@ -44,6 +45,7 @@ class EmergencyNode:
         self.pub_state = rospy.Publisher("emergency/state", String, queue_size=1, latch=True)
         self.pub_state.publish(String(data=Phase.INACTIVE.value))
         self.state_sent = Phase.INACTIVE
+        self.lockstep = LockstepAcker(period=1.0 / self.rate_hz)
 
         rospy.Subscriber("supervisor/mode", String, self._locked(lambda m: self.pending.append(("mode", m.data))),
                          queue_size=5)
@@ -94,8 +96,10 @@ class EmergencyNode:
                     self.core.deactivate(t, "supervisor mode %s" % value)
 
     def tick(self):
+        now = rospy.Time.now()
         with self.lock:
-            self._tick(rospy.get_time())
+            self._tick(now.to_sec())
+        self.lockstep.ack(now)
 
     def _tick(self, t):
         self._apply_pending(t)

@@ -3,10 +3,12 @@
 The flight is scored with the simulator's ground truth (touchdown classification and the resting
 distance from the pad); nothing here feeds ground truth back into the flying system."""
 import argparse
+import collections
 import json
 import os
 import subprocess
 import sys
+import threading
 import time
 
 from mujoco_sim.isolated_ros import IsolatedLaunch
@@ -18,7 +20,7 @@ SETTLE_AFTER_TOUCHDOWN_S = 1.0  # sim seconds the drone must rest before the out
 EMERGENCY_REPORT_WAIT_S = 4.0   # sim seconds to wait for emergency/position after an emergency touchdown
 
 
-def launch_arguments(s, bag_path):
+def launch_arguments(s):
     """roslaunch arguments of interface/scenario.launch for a validated scenario ``s``."""
     start = s["drone"]["start"]
     c = s["conditions"]
@@ -28,7 +30,6 @@ def launch_arguments(s, bag_path):
         "camera_noise": s["sensors"]["camera_noise"], "start_on_pad": str(start == "on_pad").lower(),
         "wind_speed": c["wind_speed"], "wind_direction_deg": c["wind_direction_deg"], "wind_gust": c["wind_gust"],
         "drone_battery": c["drone_battery"], "control_battery": c["control_battery"], "temp": c["temp"],
-        "bag": bag_path,
     }
     if start != "on_pad":
         args.update(start_x=start["x"], start_y=start["y"], start_z=start["z"])
@@ -59,12 +60,15 @@ class FlightMonitor:
         self.rospy, self.s = rospy, s
         rospy.init_node("scenario_runner", disable_signals=True)
         self.touchdown, self.touchdown_wall = None, None
-        self.drone, self.pad = None, None
+        # Ground-truth poses by stamp: drone and pad are published in the same simulator step, and only
+        # samples of one instant may be compared (the pad moves up to 25 m/s).
+        self.drone_poses, self.pad_poses = collections.OrderedDict(), collections.OrderedDict()
+        self.poses_lock = threading.Lock()  # the two subscriber threads write, resting_pad_error reads
         self.tracker_state, self.emergency_position = None, None
         self.decisions, self.emergency_ordered, self.landing_start = [], False, None
         rospy.Subscriber("ardrone/touchdown", Touchdown, self._on_touchdown)
-        rospy.Subscriber("groundtruth/ardrone", PoseStamped, lambda m: setattr(self, "drone", m.pose.position))
-        rospy.Subscriber("groundtruth/landing_pad", PoseStamped, lambda m: setattr(self, "pad", m.pose.position))
+        rospy.Subscriber("groundtruth/ardrone", PoseStamped, lambda m: self._remember(self.drone_poses, m))
+        rospy.Subscriber("groundtruth/landing_pad", PoseStamped, lambda m: self._remember(self.pad_poses, m))
         rospy.Subscriber("platform_tracking/state", String, lambda m: setattr(self, "tracker_state", m.data))
         rospy.Subscriber("emergency/position", PositionXYCommand,
                          lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)]))
@@ -73,6 +77,12 @@ class FlightMonitor:
         self.tracker_command = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
         self.fault = rospy.Publisher("mujoco_sim/fault", String, queue_size=10)
         self.wall_deadline = time.monotonic() + wall_timeout
+
+    def _remember(self, poses, msg, keep=100):
+        with self.poses_lock:
+            poses[msg.header.stamp] = msg.pose.position
+            while len(poses) > keep:
+                poses.popitem(last=False)
 
     def _on_touchdown(self, msg):
         if self.touchdown is None or msg.header.stamp.to_sec() > self.touchdown.header.stamp.to_sec():
@@ -87,29 +97,45 @@ class FlightMonitor:
         if decision.get("action") == "emergency_landing":
             self.emergency_ordered = True
 
-    def start(self, recorded, timeout=120.0):
-        """Once the recorder and the landing stack (if any) listen, release the simulator's physics."""
-        from std_msgs.msg import Empty
-        import rosgraph
-        master = rosgraph.Master("/scenario_runner")
-        deadline = time.monotonic() + timeout
-
-        # rosbag record -e subscribes to matching topics as it discovers them (about once a second):
-        # wait until it has every topic the analysis cannot do without.
+    def _needed_topics(self):
+        """Topics the analysis of the bag cannot do without."""
         needed = ["/ardrone/navdata", "/ardrone/touchdown", "/groundtruth/ardrone", "/groundtruth/landing_pad",
                   "/summit_xl/gps/odom", "/tf"]
-        if self.s.get("_needs_tracker"):
-            needed += ["/platform_tracking/state"]
+        return needed + (["/platform_tracking/state"] if self.s.get("_needs_tracker") else [])
+
+    def _wait(self, condition, what, deadline):
+        while not condition():
+            if time.monotonic() > deadline:
+                raise TimeoutError("%s within the time allowed (tracker state %r)" % (what, self.tracker_state))
+            time.sleep(0.1)
+
+    def wait_for_graph(self, timeout=120.0):
+        """Until every needed topic is advertised and the landing stack (if any) reports its state."""
+        import rosgraph
+        master = rosgraph.Master("/scenario_runner")
+
+        def ready():
+            advertised = {topic for topic, _ in master.getSystemState()[0]}
+            return all(t in advertised for t in self._needed_topics()) and \
+                (not self.s.get("_needs_tracker") or self.tracker_state is not None)
+        self._wait(ready, "the graph did not come up", time.monotonic() + timeout)
+
+    def wait_for_recorder(self, timeout=60.0):
+        """Until rosbag record subscribes to every needed topic. It discovers topics on start-up and
+        then on a sim-time timer, which does not run while the physics is held: hence it is started
+        after the graph is up (wait_for_graph)."""
+        import rosgraph
+        master = rosgraph.Master("/scenario_runner")
 
         def ready():
             subscribers = {topic: nodes for topic, nodes in master.getSystemState()[1]}
-            recorder_ready = not recorded or all("/flight_recorder" in subscribers.get(t, []) for t in needed)
-            return recorder_ready and (not self.s.get("_needs_tracker") or self.tracker_state is not None)
-        while not ready():
-            if time.monotonic() > deadline:
-                raise TimeoutError("the graph was not ready within %.0f s (tracker state %r)"
-                                   % (timeout, self.tracker_state))
-            time.sleep(0.1)
+            return all("/flight_recorder" in subscribers.get(t, []) for t in self._needed_topics())
+        self._wait(ready, "the flight recorder did not subscribe", time.monotonic() + timeout)
+
+    def release(self, timeout=120.0):
+        """Start the simulator's physics and wait for the clock to run."""
+        from std_msgs.msg import Empty
+        deadline = time.monotonic() + timeout
         start = self.rospy.Publisher("mujoco_sim/start", Empty, queue_size=1, latch=True)
         start.publish(Empty())
         while self.rospy.get_time() <= 0.0:
@@ -160,9 +186,13 @@ class FlightMonitor:
             time.sleep(0.02)
 
     def resting_pad_error(self):
-        if self.drone is None or self.pad is None:
-            return None
-        return ((self.drone.x - self.pad.x) ** 2 + (self.drone.y - self.pad.y) ** 2) ** 0.5
+        """Horizontal drone-to-pad distance at the latest instant both poses are known for."""
+        with self.poses_lock:
+            common = [stamp for stamp in self.drone_poses if stamp in self.pad_poses]
+            if not common:
+                return None
+            drone, pad = self.drone_poses[common[-1]], self.pad_poses[common[-1]]
+        return ((drone.x - pad.x) ** 2 + (drone.y - pad.y) ** 2) ** 0.5
 
 
 def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True):
@@ -178,7 +208,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     events = s["events"] if no_operator or any("operator" in e for e in s["events"]) else \
         [{"at_s": 0.0, "operator": "landing"}] + s["events"]
     launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
-              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s, bag)
+              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s)
     wall_start = time.monotonic()
     wall_timeout = wall_timeout or max(300.0, 4.0 * s["time_limit_s"])
     result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path)}
@@ -186,16 +216,21 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
         os.environ["ROS_MASTER_URI"] = ros.master_uri
         ros.wait_for_master()
         monitor = FlightMonitor(s, wall_timeout)
-        monitor.start(recorded=True)
-        sim_start = monitor.rospy.get_time()
-        wall_flight_start = time.monotonic()
-        try:
-            monitor.run(EventSchedule(events), s["time_limit_s"])
-            error = None
-        except TimeoutError as err:
-            error = str(err)
-        sim_time = monitor.rospy.get_time()
-        flight_wall = time.monotonic() - wall_flight_start
+        monitor.wait_for_graph()
+        recorder = IsolatedLaunch(["interface", "record.launch", "bag:=" + bag],
+                                  os.path.join(out_dir, "recorder.log"), port=ros.port)
+        with recorder:
+            monitor.wait_for_recorder()
+            monitor.release()
+            sim_start = monitor.rospy.get_time()
+            wall_flight_start = time.monotonic()
+            try:
+                monitor.run(EventSchedule(events), s["time_limit_s"])
+                error = None
+            except TimeoutError as err:
+                error = str(err)
+            sim_time = monitor.rospy.get_time()
+            flight_wall = time.monotonic() - wall_flight_start
         outcome, touchdown_error = scoring.outcome(monitor.touchdown, monitor.resting_pad_error(),
                                                    monitor.emergency_ordered)
         touchdown_time = monitor.touchdown.header.stamp.to_sec() if monitor.touchdown else None

@@ -1,7 +1,7 @@
 """supervisor node: thin ROS wrapper of interface.supervisor.Supervisor.
 
 In:  the condition parameters (/wind_speed, /drone_battery, ... via rospy.get_param_cached, pushed by the
-     master), sensor watchdogs (ardrone/bottom/image_raw, ardrone/imu, ardrone/gps/odom,
+     master), sensor watchdogs (ardrone/bottom/camera_info, ardrone/imu, ardrone/gps/odom,
      ardrone/sonar_height), platform speed (kalman_platform_odom, else summit_xl/gps/odom), the
      tracker's state (platform_tracking/state), the drone's state (ardrone/navdata), operator/command
      and the Trigger services supervisor/{landing,emergency,manual,continue}.
@@ -14,6 +14,7 @@ import sys
 import threading
 
 import rospy
+from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Navdata
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
@@ -23,7 +24,9 @@ from .conditions import MISSING, ConditionTableError, load_table
 from .supervisor import Flight, Settings, SettingsError, Supervisor
 from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, flight_from_navdata
 
-SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/image_raw", "imu_silence_s": "ardrone/imu",
+# The camera's liveness is read from camera_info, which the driver publishes with every frame: the same
+# arrivals without copying 230 kB images into this process.
+SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/camera_info", "imu_silence_s": "ardrone/imu",
                  "odometry_silence_s": "ardrone/gps/odom", "sonar_silence_s": "ardrone/sonar_height"}
 SERVICES = ("landing", "emergency", "manual", "continue")
 NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
@@ -85,6 +88,7 @@ class SupervisorNode:
         self.navdata = None  # (receipt time, state)
         self.published = {"mode": None, "warning": None, "landing_allowed": None}
         self.last_warning_sent = -1e9
+        self.lockstep = LockstepAcker(period=1.0 / self.params["rate_hz"])
 
         self.pub_decisions = rospy.Publisher("supervisor/decisions", String, queue_size=100)
         self.pub_mode = rospy.Publisher("supervisor/mode", String, queue_size=1, latch=True)
@@ -93,8 +97,8 @@ class SupervisorNode:
         self.pub_tracker = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
 
         for name, topic in SENSOR_TOPICS.items():
-            # AnyMsg: only the arrival matters, nothing is deserialised (the camera is 230 kB a frame).
-            rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1, buff_size=2 ** 20)
+            # AnyMsg: only the arrival matters, nothing is deserialised.
+            rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
         rospy.Subscriber("kalman_platform_odom", Odometry, self._on_platform_odom, queue_size=1)
         rospy.Subscriber("summit_xl/gps/odom", Odometry, self._on_vehicle_gps, queue_size=5)
         rospy.Subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
@@ -200,10 +204,12 @@ class SupervisorNode:
             self.published["landing_allowed"] = self.core.landing_allowed
 
     def tick(self):
-        t = rospy.get_time()
+        now = rospy.Time.now()
+        t = now.to_sec()
         with self.lock:
             self.core.tick(t, self._readings(t), self._flight(t))
             self._publish(t)
+        self.lockstep.ack(now)
 
     def spin(self):
         rate = rospy.Rate(self.params["rate_hz"])  # sim time

@@ -12,7 +12,7 @@ import time
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
-from landing_msgs.msg import Altimeter, Navdata, Touchdown
+from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
@@ -20,6 +20,7 @@ from std_msgs.msg import Empty, String
 
 from .autopilot import FlightMode
 from .config import ConfigError
+from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
 from .simulator import Simulator
 
@@ -68,6 +69,9 @@ class SimNode:
         self.cfg = validate_sim_config(private, "sim_node private parameters (%s)" % rospy.get_name())
         self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
+        lockstep = self.cfg["lockstep"]
+        self.lockstep = LockstepGate(lockstep["max_lead_s"], lockstep["stale_after_wall_s"], log=rospy.loginfo) \
+            if lockstep["enabled"] else None
         self.conditions = {}
         self.rejected = {}  # condition -> the operator's invalid value, left in place and ignored
         self._init_conditions()
@@ -80,7 +84,7 @@ class SimNode:
         self.schedules["vehicle_gps"] = Schedule(self.sim.vehicle_cfg["gps_rate_hz"])
         self.schedules["stats"] = Schedule(0.2)
         self.last_touchdown = None
-        self.timing = {"physics": 0.0, "render": 0.0, "publish": 0.0, "pacing": 0.0}
+        self.timing = {"physics": 0.0, "render": 0.0, "publish": 0.0, "pacing": 0.0, "lockstep": 0.0}
 
     # ----- set-up ------------------------------------------------------------------------------
     def _init_conditions(self):
@@ -145,13 +149,18 @@ class SimNode:
         self.camera_info.header.frame_id = "ardrone/bottom_camera"
 
     def _init_subscribers(self):
-        rospy.Subscriber("ardrone/cmd_vel", Twist, self._on_cmd_vel, queue_size=1)
+        rospy.Subscriber("ardrone/cmd_vel", Twist, self._on_cmd_vel, queue_size=1, tcp_nodelay=True)
         rospy.Subscriber("summit_xl_control/cmd_vel", Twist, self._on_vehicle_cmd, queue_size=1)
         rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
         rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
         rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
         rospy.Subscriber("mujoco_sim/start", Empty, lambda _: self.started.set(), queue_size=1)
         rospy.Subscriber("mujoco_sim/fault", String, self._on_fault, queue_size=10)
+        if self.lockstep is not None:
+            rospy.Subscriber("lockstep_ack", LockstepAck, self._on_lockstep_ack, queue_size=100, tcp_nodelay=True)
+
+    def _on_lockstep_ack(self, msg):
+        self.lockstep.acknowledge(msg.node, msg.input, msg.stamp.to_sec(), msg.period.to_sec())
 
     def _on_cmd_vel(self, msg):
         problem = self.sim.set_velocity_command(msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.z)
@@ -200,6 +209,8 @@ class SimNode:
         while not rospy.is_shutdown():
             while not self.actions.empty():
                 self.actions.get()()
+            if self.lockstep is not None:
+                self._wait_for_lagging_nodes()
             t0 = time.perf_counter()
             self.sim.step()
             t1 = time.perf_counter()
@@ -216,6 +227,19 @@ class SimNode:
             if max_sim_time is not None and self.sim.time >= max_sim_time:
                 break
         self.sim.close()
+
+    def _wait_for_lagging_nodes(self):
+        """Lock-step: hold sim time while a node that acknowledges its work lags too far behind."""
+        next_time = self.sim.time + self.sim.dt
+        blocker = self.lockstep.blocker(next_time, time.monotonic())
+        if blocker is None:
+            return
+        t0 = time.perf_counter()
+        while blocker is not None and not rospy.is_shutdown():
+            self.lockstep.acknowledged.clear()
+            self.lockstep.acknowledged.wait(0.005)
+            blocker = self.lockstep.blocker(next_time, time.monotonic())
+        self.timing["lockstep"] += time.perf_counter() - t0
 
     def _open_viewer(self):
         try:
@@ -261,6 +285,10 @@ class SimNode:
         if self.sim.touchdown is not None and self.sim.touchdown is not self.last_touchdown:
             self.last_touchdown = self.sim.touchdown
             self._publish_touchdown(self.sim.touchdown)
+
+    def _published(self, publisher, stamp):
+        if self.lockstep is not None:
+            self.lockstep.published(publisher.resolved_name, stamp.to_sec())
 
     @staticmethod
     def _header(stamp, frame):
@@ -312,6 +340,7 @@ class SimNode:
                     width=image.shape[1], encoding="rgb8", is_bigendian=0, step=image.shape[1] * 3,
                     data=image.tobytes())
         self.pub_image.publish(msg)
+        self._published(self.pub_image, stamp)
         self.camera_info.header.stamp = stamp
         self.pub_info.publish(self.camera_info)
 
@@ -326,6 +355,7 @@ class SimNode:
         msg.angular_velocity_covariance = _diag(n["imu_gyro_std"] ** 2)
         msg.linear_acceleration_covariance = _diag(n["imu_accel_std"] ** 2)
         self.pub_imu.publish(msg)
+        self._published(self.pub_imu, stamp)
 
     def _publish_sonar(self, stamp):
         s = self.cfg["sensors"]

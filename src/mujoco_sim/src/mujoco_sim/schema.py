@@ -18,6 +18,11 @@ SIM_SCHEMA = {
     "seed": Param(I, 0),
     "vehicle": Param(S, choices=("summit_xl", "car")),
     "real_time_factor": Param(F, 0.0, 1000.0),
+    "lockstep": {
+        "enabled": Param(B),
+        "max_lead_s": Param(F, 0.005, 10.0, "s"),
+        "stale_after_wall_s": Param(F, 0.05, 60.0, "s"),
+    },
     "camera": {
         "enabled": Param(B),
         "width": Param(I, 16, 1920, "px"),

@@ -166,6 +166,11 @@ class Simulator:
     def time(self):
         return float(self.data.time)
 
+    @property
+    def dt(self):
+        """Physics step [s]."""
+        return float(self.model.opt.timestep)
+
     def set_velocity_command(self, vx, vy, vz, yaw_rate):
         """Returns None when accepted, else why the command was ignored (the drone then holds)."""
         problem = VelocityCommand.problem((vx, vy, vz, yaw_rate))

@@ -12,9 +12,11 @@
 #include "ped_traj_pred/pad_motion_filter.h"
 
 #include <geometry_msgs/PointStamped.h>
+#include <landing_msgs/lockstep_acker.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -38,6 +40,8 @@ private:
   void onDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
   void onGps(const nav_msgs::Odometry::ConstPtr& msg);
   void onTimer(const ros::TimerEvent& event);
+  /// One tick: log track changes, publish the prediction while tracking.
+  void step(const ros::Time& now);
   /// The message's stamp, or now when it is zero (a publisher that does not stamp).
   ros::Time stampOf(const std_msgs::Header& header) const;
   void logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp);
@@ -56,6 +60,7 @@ private:
   ros::Timer timer_;
   bool tracking_ = false;     // as of the last timer tick, for logging the transitions once
   ros::Time last_tick_;
+  std::optional<landing_msgs::LockstepAcker> lockstep_;  // created once pub_freq is known
 };
 
 }  // namespace ped_traj_pred

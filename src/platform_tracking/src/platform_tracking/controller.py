@@ -45,6 +45,11 @@ class DroneState:
     yaw: float
     sonar_height: Optional[float] = None
 
+    def moved(self, dt):
+        """The state ``dt`` seconds later at constant velocity: an estimate stamped a few samples ago
+        is compared with the pad predicted for now, and at car speed every 10 ms is 15 cm."""
+        return dataclasses.replace(self, position=self.position + self.velocity * dt)
+
 
 class PadPrediction:
     """What the predictor says about the pad: its ``position`` and ``velocity`` (world) at ``stamp``

@@ -76,7 +76,7 @@ class AxisFilter:
         self.var *= 1.0 - gain
 
     def position_at(self, dt, velocity):
-        return self.p + velocity * max(0.0, dt)
+        return self.p + velocity * dt
 
 
 class HorizontalFilter:
@@ -229,18 +229,20 @@ class DroneEstimator:
         self.time = t
 
     def estimate(self, t=None):
-        """The estimate extrapolated to ``t`` (default: the latest measurement time); None before ``ready``."""
+        """The estimate moved to ``t`` (default: the latest measurement time) with the current velocity,
+        also backwards: the sensors arrive on separate threads, so the filter may already be a sample
+        ahead of the stamp asked for, and at 15 m/s a 10 ms mislabel is 15 cm. None before ``ready``."""
         if not self.ready:
             return None
         t = self.time if t is None else t
-        dt = max(0.0, t - self.time)
+        dt = t - self.time
         velocity = self._velocity(self.time)
         position = np.array([self.horizontal.x[0] + velocity[0] * dt, self.horizontal.x[1] + velocity[1] * dt,
                              self.vertical.position_at(dt, velocity[2])])
         # A measurement update moves the filter state at once; the published position takes that
         # step over correction_smoothing_time, so a consumer differentiating it sees no jump.
         smoothing = self.p.correction_smoothing_time
-        position -= self.pending_correction * (math.exp(-dt / smoothing) if smoothing > 0.0 else 0.0)
+        position -= self.pending_correction * (math.exp(-max(0.0, dt) / smoothing) if smoothing > 0.0 else 0.0)
         variance = np.array([self.horizontal.P[0, 0], self.horizontal.P[1, 1], self.vertical.var])
         return Estimate(t, position, velocity, tuple(self.orientation), self.yaw, variance)
 

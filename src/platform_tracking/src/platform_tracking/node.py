@@ -28,6 +28,7 @@ import threading
 import numpy as np
 import rospy
 from geometry_msgs.msg import Twist
+from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
@@ -81,6 +82,7 @@ class EstimatorNode:
         self.lock = threading.Lock()
         self.estimator = self._new_estimator()
         self.publisher = rospy.Publisher("ardrone/odom_estimate", Odometry, queue_size=10)
+        self.lockstep = LockstepAcker("ardrone/imu")
         rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=20)
         rospy.Subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=20)
         rospy.Subscriber("ardrone/gps/odom", Odometry, self.on_gps, queue_size=5)
@@ -110,6 +112,7 @@ class EstimatorNode:
             estimate = self.estimator.estimate(t)
         if estimate is not None:
             self.publish(msg, estimate)
+        self.lockstep.ack(msg.header.stamp)
 
     def on_navdata(self, msg):
         if not finite(msg.vx, msg.vy, msg.vz):
@@ -209,6 +212,7 @@ class TrackingNode:
         self.requests = set()
         self.landing_allowed = True
         self.me = rospy.get_caller_id()
+        self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
         self.pub_cmd = rospy.Publisher("ardrone/cmd_vel", Twist, queue_size=1)
         self.pub_takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
@@ -313,14 +317,15 @@ class TrackingNode:
         return self.prediction
 
     def step(self):
-        t = rospy.get_time()
+        now = rospy.Time.now()
+        t = now.to_sec()
         with self.lock:
             drone = None
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
                 state = self.estimate[1]
                 yaw = self.imu_yaw[1] if self.imu_yaw is not None and t - self.imu_yaw[0] <= ESTIMATE_MAX_AGE \
                     else state.yaw
-                drone = DroneState(state.position, state.velocity, yaw, self.sonar)
+                drone = DroneState(state.position, state.velocity, yaw, self.sonar).moved(t - self.estimate[0])
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
                             force_land="force_land" in self.requests, landing_allowed=self.landing_allowed)
@@ -338,6 +343,7 @@ class TrackingNode:
             self.pub_cmd.publish(twist)
         if out.state != before:
             self.pub_state.publish(String(data=out.state.value))
+        self.lockstep.ack(now)
 
     def spin(self):
         wait_for_clock()

@@ -3,6 +3,7 @@ import sys
 
 import rospy
 from geometry_msgs.msg import Twist
+from landing_msgs.lockstep import LockstepAcker
 from std_msgs.msg import Empty
 
 from .paths import Path, PathError
@@ -30,16 +31,19 @@ def main():
     while not rospy.is_shutdown() and rospy.get_time() == 0.0:
         rospy.sleep(0.01)  # wait for the first /clock
     rate = rospy.Rate(rate_hz)
+    lockstep = LockstepAcker(period=1.0 / rate_hz)
     start_time = None
     rospy.loginfo("summit_moves: %s path at %.2f m/s (radius %.1f m)", path.kind, path.speed, path.radius)
     while not rospy.is_shutdown():
-        now = rospy.get_time()
+        stamp = rospy.Time.now()
+        now = stamp.to_sec()
         if started["flag"] and start_time is None:
             start_time = now + start_delay
         speed, yaw_rate = path.command(now - start_time) if start_time is not None else (0.0, 0.0)
         msg = Twist()
         msg.linear.x, msg.angular.z = speed, yaw_rate
         publisher.publish(msg)
+        lockstep.ack(stamp)
         try:
             rate.sleep()
         except rospy.ROSTimeMovedBackwardsException:

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <image_transport/image_transport.h>
 #include <landing_msgs/Altimeter.h>
+#include <landing_msgs/lockstep_acker.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -49,6 +50,7 @@ class PlatformDetectionRos {
 
  private:
   void onImage(const sensor_msgs::ImageConstPtr& msg);
+  void processImage(const sensor_msgs::ImageConstPtr& msg);
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& msg);
   void onImu(const sensor_msgs::ImuConstPtr& msg);
   void onSonar(const sensor_msgs::RangeConstPtr& msg);
@@ -57,6 +59,10 @@ class PlatformDetectionRos {
 
   // IMU attitude nearest to `stamp`, if one is within imu_max_offset.
   std::optional<Eigen::Quaterniond> attitudeAt(const ros::Time& stamp) const;
+  // The drone's estimated position at `stamp`: interpolated between two estimates, else moved from the
+  // nearest one (at most odom_timeout away) with its velocity. The estimate trails the camera by the
+  // estimator's latency, and the drone moves by metres per second, so the newest one is not good enough.
+  std::optional<Eigen::Vector3d> dronePositionAt(const ros::Time& stamp) const;
   // A reading stamped within `timeout` of `stamp`, else NaN.
   static double freshValue(const std::optional<std::pair<ros::Time, double>>& reading, const ros::Time& stamp,
                            double timeout);
@@ -75,7 +81,12 @@ class PlatformDetectionRos {
   std::optional<CameraIntrinsics> intrinsics_;
   std::deque<std::pair<ros::Time, Eigen::Quaterniond>> attitudes_;  // last second of IMU orientations
   std::optional<std::pair<ros::Time, double>> sonar_, altitude_;
-  nav_msgs::OdometryConstPtr odom_estimate_;
+  struct PositionEstimate {
+    ros::Time stamp;
+    Eigen::Vector3d position, velocity;  // world frame [m], [m/s]
+  };
+  std::deque<PositionEstimate> estimates_;  // last second of ardrone/odom_estimate
+  landing_msgs::LockstepAcker lockstep_;
 };
 
 }  // namespace uav_vision
