@@ -8,7 +8,7 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "src"))
-from interface.conditions import MISSING, load_table  # noqa: E402
+from interface.conditions import MISSING, PENDING, load_table  # noqa: E402
 from interface.supervisor import Flight, Mode, Settings, SettingsError, Supervisor  # noqa: E402
 
 TABLE_PATH = os.path.join(HERE, "..", "config", "conditions.yaml")
@@ -142,6 +142,18 @@ def test_landing_chosen_before_the_first_reading_waits_for_it(h):
 def test_landing_chosen_before_the_first_reading_starts_once_it_is_clear(h):
     h.command("landing")
     h.tick()
+    assert h.sup.mode is Mode.LANDING and h.tracker == ["takeoff"]
+
+
+def test_landing_chosen_while_a_measurement_is_pending_waits_for_it(h):
+    # the vehicle's first speed report has not arrived yet at t=0
+    h.tick(platform_speed=PENDING)
+    accepted, message = h.command("landing")
+    assert accepted and "waits for the first reading" in message and h.sup.mode is Mode.IDLE
+    assert not actions(h.decisions, "takeoff")
+    h.run(0.2, platform_speed=PENDING)
+    assert h.sup.mode is Mode.IDLE
+    h.run(0.1, platform_speed=1.0)
     assert h.sup.mode is Mode.LANDING and h.tracker == ["takeoff"]
 
 

@@ -7,7 +7,7 @@ import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "src"))
-from interface.conditions import (MISSING, ConditionTableError, evaluate, load_table, parse_table,  # noqa: E402
+from interface.conditions import (MISSING, PENDING, ConditionTableError, evaluate, load_table, parse_table,  # noqa: E402
                                   read_value)
 from interface.supervisor import Flight  # noqa: E402
 from interface.supervisor_measures import (PlatformSpeed, SensorWatchdog, TargetLostTimer,  # noqa: E402
@@ -145,6 +145,18 @@ def test_measured_value_missing_is_unsafe(table):
     assert evaluation.present and "measured platform_speed is not set" in evaluation.detail
 
 
+def test_measured_value_pending_is_neither_safe_nor_unsafe(table):
+    evaluation = evaluate(table.row("platform_too_fast"), PENDING)
+    assert not evaluation.present and "not measured yet" in evaluation.detail
+
+
+def test_platform_speed_never_reported_becomes_missing_after_the_start_up_grace():
+    speed = PlatformSpeed(filtered_timeout_s=1.0, window_s=1.0, gps_timeout_s=1.0)
+    assert speed.value(5.0) is PENDING
+    assert speed.value(5.9) is PENDING
+    assert speed.value(6.1) is MISSING
+
+
 # ----- the supervisor node's measurements ------------------------------------------------------------------
 def test_sensor_watchdog_counts_from_start_and_from_the_last_message():
     watchdog = SensorWatchdog(["camera", "imu"])
@@ -156,7 +168,7 @@ def test_sensor_watchdog_counts_from_start_and_from_the_last_message():
 
 def test_platform_speed_prefers_the_vehicle_report_then_falls_back_to_the_kalman_filter():
     speed = PlatformSpeed(filtered_timeout_s=1.0, window_s=1.0)
-    assert speed.value(0.0) is MISSING
+    assert speed.value(0.0) is PENDING       # start-up: the first report has not had time to come
     for i in range(6):
         speed.on_gps(i * 0.2, 3.0 + (0.1 if i % 2 else -0.1), 4.0)
     speed.on_filtered(1.0, 0.0, 24.0)        # a jump of the filter while it acquires the pad

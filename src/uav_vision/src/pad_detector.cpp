@@ -173,6 +173,11 @@ std::string PadDetector::validate(const PadDetectorParams& p) {
   if (!in(p.fit_tolerance_m, 0.001, 0.5 * p.pad.side)) return "fit_tolerance_m must be in [0.001, pad side / 2]";
   if (!in(p.min_strip_area_px, 1, 1e6)) return "min_strip_area_px must be in [1, 1e6]";
   if (!in(p.min_partial_support_px, 0.0, 1000.0)) return "min_partial_support_px must be in [0, 1000]";
+  if (!(p.pad.marker_side > 0.0 && p.pad.marker_side / 2 < std::abs(p.pad.strip_offset) - p.pad.strip_width / 2))
+    return "marker_side must be positive and the centre marker clear of the strip";
+  if (!in(p.marker_saturation_max, 0, 255) || !in(p.marker_value_min, 0, 255))
+    return "marker_saturation_max and marker_value_min must be in [0, 255]";
+  if (!in(p.marker_min_surround, 0, 1)) return "marker_min_surround must be in [0, 1]";
   return "";
 }
 
@@ -248,6 +253,11 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
       rejected_area = area;
       result.reason = d.reason;
     }
+  }
+  if (view && (!result.found || result.partial)) {
+    // Close range: the marker is smaller and wholly in view, so it beats a pad completed from edges.
+    Detection marker;
+    if (findMarker(outlines, size, *view, marker)) result = marker;
   }
   if (!result.found) return result;
 
@@ -628,6 +638,74 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const c
   d.quality = clamp01(0.8 * std::min(1.0, support / (2.0 * side_px)) * std::exp(-chosen->rms / p.fit_tolerance_m) *
                       (1.0 - 10.0 * chosen->outside));
   return true;
+}
+
+bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size,
+                             const PlaneView& view, Detection& d) const {
+  const auto& p = params_;
+  d.reason = "no centre marker in view";
+  cv::threshold(planes_[1], marker_mask_, p.marker_saturation_max, 255, cv::THRESH_BINARY_INV);
+  cv::threshold(planes_[2], bright_, p.marker_value_min - 1, 255, cv::THRESH_BINARY);
+  cv::bitwise_and(marker_mask_, bright_, marker_mask_);
+  if (p.morphology_kernel_px > 1) cv::morphologyEx(marker_mask_, marker_mask_, cv::MORPH_OPEN, kernel_);
+  std::vector<std::vector<cv::Point>> blobs;
+  cv::findContours(marker_mask_, blobs, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+
+  double best_size_error = p.size_tolerance;
+  for (const auto& blob : blobs) {
+    const double area = cv::contourArea(blob);
+    if (area < p.min_strip_area_px) continue;
+    if (std::any_of(blob.begin(), blob.end(), [&](const cv::Point& q) { return onBorder(q, size, p.border_margin_px); })) {
+      d.reason = "centre marker cut by the image border";
+      continue;
+    }
+    // Corners of the marker's image (a small square: the rotated bounding box is close enough), on the plane.
+    cv::Point2f box[4];
+    cv::minAreaRect(blob).points(box);
+    std::array<Eigen::Vector2d, 4> corners;
+    bool on_plane = true;
+    for (int k = 0; k < 4 && on_plane; ++k) {
+      const auto q = view.pixelToPlane(box[k]);
+      on_plane = q.has_value();
+      if (q) corners[k] = *q;
+    }
+    if (!on_plane) continue;
+    double side = 0.0;
+    for (int k = 0; k < 4; ++k) side += (corners[(k + 1) % 4] - corners[k]).norm() / 4.0;
+    const double size_error = std::abs(side / p.pad.marker_side - 1.0);
+    if (size_error > best_size_error) {
+      d.reason = format("white blob of %.2f m is not the %.2f m centre marker", side, p.pad.marker_side);
+      continue;
+    }
+    // It must lie on the pad: red all around it.
+    const cv::Rect inner = cv::boundingRect(blob);
+    const int margin = std::max(2, int(std::round(0.3 * std::sqrt(area))));
+    const cv::Rect band = (inner + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & cv::Rect(cv::Point(), size);
+    const double band_area = band.area() - area;
+    const double red_share = band_area > 0 ? cv::countNonZero(pad_mask_(band)) / band_area : 0.0;
+    if (red_share < p.marker_min_surround) {
+      d.reason = format("white blob with only %.0f%% red around it is not the centre marker", 100 * red_share);
+      continue;
+    }
+    const Eigen::Vector2d centre = (corners[0] + corners[1] + corners[2] + corners[3]) / 4.0;
+    const auto centre_px = view.planeToPixel(centre);
+    if (!centre_px) continue;
+    const cv::Moments m = cv::moments(blob);
+    const cv::Point2f centroid(float(m.m10 / m.m00), float(m.m01 / m.m00));
+    const auto enclosing = std::find_if(outlines.begin(), outlines.end(), [&](const std::vector<cv::Point>& o) {
+      return cv::contourArea(o) >= p.min_area_px && cv::pointPolygonTest(o, centroid, false) >= 0;
+    });
+    best_size_error = size_error;
+    d = Detection();
+    d.found = true;
+    d.marker = true;
+    d.centre_px = *centre_px;
+    for (int k = 0; k < 4; ++k) d.corners_px[k] = box[k];
+    d.side_px = std::sqrt(area);
+    d.quality = clamp01(0.9 * (1.0 - size_error));
+    d.outline = enclosing != outlines.end() ? *enclosing : blob;
+  }
+  return d.found;
 }
 
 }  // namespace uav_vision

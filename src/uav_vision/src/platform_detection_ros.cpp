@@ -54,6 +54,7 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   d.pad.strip_length = num("pad/strip_length");
   d.pad.strip_width = num("pad/strip_width");
   d.pad.strip_offset = num("pad/strip_offset");
+  d.pad.marker_side = num("pad/marker_side");
   h.camera_below_base_link = num("drone/camera_below_base_link");
   h.sonar_below_base_link = num("drone/sonar_below_base_link");
   h.sonar_max_range = num("drone/sonar_max_range");
@@ -67,6 +68,8 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   d.green_hue_max = integer("colour/green_hue_max");
   d.green_saturation_min = integer("colour/green_saturation_min");
   d.green_value_min = integer("colour/green_value_min");
+  d.marker_saturation_max = integer("colour/marker_saturation_max");
+  d.marker_value_min = integer("colour/marker_value_min");
   d.morphology_kernel_px = integer("shape/morphology_kernel_px");
   d.min_area_px = num("shape/min_area_px");
   d.min_solidity = num("shape/min_solidity");
@@ -80,6 +83,7 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   d.fit_tolerance_m = num("shape/fit_tolerance_m");
   d.min_partial_support_px = num("shape/min_partial_support_px");
   d.min_strip_area_px = num("shape/min_strip_area_px");
+  d.marker_min_surround = num("shape/marker_min_surround");
   c.localizer.sonar_footprint_margin_px = num("shape/sonar_footprint_margin_px");
   c.odom_timeout = num("timing/odom_timeout");
   c.imu_max_offset = num("timing/imu_max_offset");
@@ -326,7 +330,7 @@ void PlatformDetectionRos::publishDebugImage(const sensor_msgs::ImageConstPtr& m
     cv::drawMarker(canvas, d.centre_px, colour(255, 255, 0), cv::MARKER_CROSS, 12, 2);
     if (d.strip_found) cv::circle(canvas, d.strip_centre_px, 4, colour(0, 255, 0), 2);
     char buffer[128];
-    std::snprintf(buffer, sizeof(buffer), "%s x=%.2f y=%.2f h=%.2f q=%.2f", d.partial ? "partial" : "pad",
+    std::snprintf(buffer, sizeof(buffer), "%s x=%.2f y=%.2f h=%.2f q=%.2f", d.marker ? "marker" : d.partial ? "partial" : "pad",
                   observation.centre_in_body.x(), observation.centre_in_body.y(), observation.height.camera_height,
                   d.quality);
     text = buffer;

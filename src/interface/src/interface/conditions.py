@@ -34,6 +34,17 @@ class Missing:
 MISSING = Missing()
 
 
+class Pending:
+    """Marker of a measurement that has not had time to arrive yet (start-up): neither safe nor unsafe.
+    The supervisor holds operator commands until it is known."""
+
+    def __repr__(self):
+        return "<pending>"
+
+
+PENDING = Pending()
+
+
 class ConditionRow:
     __slots__ = ("name", "param", "measure", "unit", "valid", "thresholds", "flag", "blocks_landing", "reason",
                  "message")
@@ -219,6 +230,8 @@ class Evaluation:
 
 
 def evaluate(row, raw):
+    if raw is PENDING:
+        return Evaluation(row, False, None, False, "%s not measured yet" % row.describe_source())
     value, problem = read_value(raw, row)
     if problem is not None:
         return Evaluation(row, True, raw, True, "%s: treated as unsafe" % problem)

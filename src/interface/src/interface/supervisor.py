@@ -18,7 +18,7 @@ readings and commands in and publishes what comes out.
 import enum
 import math
 
-from .conditions import MISSING, evaluate
+from .conditions import MISSING, PENDING, evaluate
 
 
 class Mode(enum.Enum):
@@ -135,7 +135,8 @@ class Supervisor:
         self._reported_takeoff_nogo = None
         self._warning_rows, self._warning_id = None, 0
         self._decisions, self._tracker_commands = [], []
-        self._before_first_tick = []     # operator commands that came before any condition was read
+        self._waiting_commands = []      # operator commands held until every condition has been read once
+        self._conditions_known = False   # a tick has run and no measurement was still pending
 
     # ----- outputs ---------------------------------------------------------------------------------
     def take_outputs(self):
@@ -206,9 +207,11 @@ class Supervisor:
                 self._follow_up(t, state)
             else:
                 state.evaluation = evaluation
-        waiting, self._before_first_tick = self._before_first_tick, []
-        for word in waiting:
-            self.command(t, word)
+        self._conditions_known = not any(raw is PENDING for raw in readings.values())
+        if self._conditions_known:
+            waiting, self._waiting_commands = self._waiting_commands, []
+            for word in waiting:
+                self.command(t, word)
         self._auto_takeoff(t)
         self._update_landing_allowed(t)
         self._update_warning()
@@ -403,9 +406,9 @@ class Supervisor:
             message = "ignored %r: the supervisor has quit; restart the launch to fly again" % word
             self._decide(t, "operator", None, "ignored", message, word)
             return False, message
-        if self._idle_since is None:
-            # nothing evaluated yet: a "go" now would ignore a condition that is already there
-            self._before_first_tick.append(word)
+        if not self._conditions_known:
+            # not everything evaluated yet: a "go" now would ignore a condition that is already there
+            self._waiting_commands.append(word)
             return True, "%r waits for the first reading of the conditions" % word
         if self.mode is Mode.IDLE and word != "ack":
             self._operator_chose = True

@@ -3,7 +3,7 @@ been lost, and the drone's flight state from the navdata state code."""
 import collections
 import math
 
-from .conditions import MISSING
+from .conditions import MISSING, PENDING
 from .supervisor import Flight
 
 # landing_msgs/Navdata state codes (ardrone_autonomy's numbering).
@@ -41,7 +41,8 @@ class PlatformSpeed:
     """Ground speed of the pad: the vehicle's own reported GPS velocity while it is fresh, else the
     Kalman filter's estimate; each averaged over ``window_s``. The vehicle's report comes first because
     the filter's estimate jumps while it acquires or loses the pad (a 15 m/s car read as 24 m/s), and
-    a single jump must not call the landing off."""
+    a single jump must not call the landing off. Until the first report has had ``gps_timeout_s`` to
+    arrive after the first question, the speed is PENDING rather than missing."""
 
     SOURCES = (("gps", "summit_xl/gps/odom"), ("filtered", "kalman_platform_odom"))
 
@@ -49,6 +50,7 @@ class PlatformSpeed:
         self.window_s = window_s
         self.timeouts = {"filtered": filtered_timeout_s, "gps": gps_timeout_s}
         self.samples = {"filtered": collections.deque(), "gps": collections.deque()}
+        self.first_asked = None
 
     def _add(self, kind, t, vx, vy):
         samples = self.samples[kind]
@@ -72,7 +74,9 @@ class PlatformSpeed:
     def value(self, t):
         kind, _ = self._fresh(t)
         if kind is None:
-            return MISSING
+            self.first_asked = t if self.first_asked is None else self.first_asked
+            never = not any(self.samples.values())
+            return PENDING if never and t - self.first_asked <= self.timeouts["gps"] else MISSING
         samples = self.samples[kind]
         recent = [speed for stamp, speed in samples if stamp >= t - self.window_s] or [samples[-1][1]]
         return sum(recent) / len(recent)

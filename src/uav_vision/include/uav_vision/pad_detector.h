@@ -8,7 +8,9 @@
 //    of the square's centre, exact under perspective); shape checks (convexity, solidity, side ratio,
 //    corner angles) and, when the view geometry is known, the metric size and right angles;
 //  - pad cut by the image border: the visible edges (and the strip's) are back-projected onto the pad
-//    plane and a 1 m square with its strip is fitted to them, which needs the view geometry.
+//    plane and a 1 m square with its strip is fitted to them, which needs the view geometry;
+//  - close range (no whole pad): the white centre marker, wholly in view and surrounded by red, is the
+//    pad centre. In the last half metre above the pad the red fills the image and has no edge in view.
 // The green strip's centre gives the pad's forward direction.
 #pragma once
 
@@ -30,6 +32,7 @@ struct PadModel {
   double strip_length = 0.7;   // green strip, across the pad (along the pad's left axis)
   double strip_width = 0.12;   // green strip, along the pad's forward axis
   double strip_offset = 0.36;  // strip centre ahead of the pad centre
+  double marker_side = 0.14;   // white square at the pad centre
 };
 
 struct PadDetectorParams {
@@ -43,6 +46,8 @@ struct PadDetectorParams {
   int green_hue_max = 85;
   int green_saturation_min = 100;
   int green_value_min = 60;
+  int marker_saturation_max = 60;  // the white marker: grey-white, unsaturated...
+  int marker_value_min = 110;      // ...and bright (it renders at about 180 under the scene's light)
   int morphology_kernel_px = 3;          // opening removes specks smaller than this [px]; 1 = off
   double min_area_px = 60.0;             // smaller blobs are not considered [px^2]
   double min_solidity = 0.9;             // contour area / convex hull area
@@ -56,6 +61,7 @@ struct PadDetectorParams {
   double fit_tolerance_m = 0.06;         // partial pads: outline may stray this far from the fitted square
   double min_partial_support_px = 30.0;  // partial pads: visible edge needed to place the centre along each axis [px]
   double min_strip_area_px = 10.0;       // smaller green blobs are not the strip [px^2]
+  double marker_min_surround = 0.6;      // share of red in a band around a white blob for it to be the marker
 };
 
 struct Detection {
@@ -65,6 +71,7 @@ struct Detection {
   double side_px = 0.0;             // mean side length in the image [px]
   std::array<cv::Point2d, 4> corners_px{};  // pad corners, in order around the square (fitted ones when partial)
   bool partial = false;             // pad cut by the image border; centre completed from edges, corners, strip
+  bool marker = false;              // found by the centre marker (close range); corners_px are the marker's
   bool strip_found = false;         // green heading strip seen inside the pad
   cv::Point2d strip_centre_px;      // its centre (moments centroid; the fitted centre when the strip is cut)
   double expected_side_px = 0.0;    // pad side expected from the camera height, 0 when unknown [px]
@@ -99,10 +106,13 @@ class PadDetector {
   bool evaluatePartial(const std::vector<cv::Point>& outline, const cv::Size& size, const PlaneView& view,
                        Candidate& candidate) const;
   const std::vector<cv::Point>* findStrip(const std::vector<cv::Point>& outline) const;
+  // The centre marker inside one of the red `outlines`; false (with d.reason) when none qualifies.
+  bool findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size, const PlaneView& view,
+                  Detection& d) const;
 
   PadDetectorParams params_;
   cv::Mat kernel_;
-  mutable cv::Mat hsv_, planes_[3], not_red_hue_, red_colour_, bright_, pad_mask_, strip_mask_;
+  mutable cv::Mat hsv_, planes_[3], not_red_hue_, red_colour_, bright_, pad_mask_, strip_mask_, marker_mask_;
   mutable std::vector<std::vector<cv::Point>> strip_outlines_;
 };
 
