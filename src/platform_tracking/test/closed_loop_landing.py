@@ -156,7 +156,9 @@ def run_landing(vehicle="summit_xl", path="straight", speed=1.0, radius=10.0, se
             requested_takeoff = requested_takeoff or takeoff
             land = operator_land_at is not None and not land_requested and t >= operator_land_at
             land_requested = land_requested or land
-            out = machine.step(Inputs(t, drone, prediction, navdata_state(sim, FlightMode), takeoff=takeoff, land=land))
+            vision_age = None if prediction is None else t - prediction.stamp  # the stand-in samples = detections
+            out = machine.step(Inputs(t, drone, prediction, navdata_state(sim, FlightMode), takeoff=takeoff, land=land,
+                                      vision_age=vision_age))
             if out.send_takeoff:
                 sim.takeoff()
             if out.send_land:

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""TEST STAND-IN for uav_vision + ped_traj_pred (not vision): publishes kalman_prediction_path and
-kalman_platform_odom from the simulator's ground-truth pad, with noise and latency, so the tracking
-nodes can be exercised before the real pipeline exists. For tests only: ground truth must never feed
+"""TEST STAND-IN for uav_vision + ped_traj_pred (not vision): publishes kalman_prediction_path,
+kalman_platform_odom and (for its stamp: when the pad was seen) platform/current_platform_position_in_ardrone
+from the simulator's ground-truth pad, with noise and latency, so the tracking nodes can be exercised
+alone. For tests only: ground truth must never feed
 the flying system outside a test.
 
 Like uav_vision, it anchors the pad's world position on the drone's own estimate:
@@ -12,7 +13,7 @@ import collections
 
 import numpy as np
 import rospy
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import PointStamped, PoseStamped
 from nav_msgs.msg import Odometry, Path
 
 
@@ -28,6 +29,7 @@ class StandIn:
         self.queue = collections.deque()
         self.pub_path = rospy.Publisher("kalman_prediction_path", Path, queue_size=5)
         self.pub_odom = rospy.Publisher("kalman_platform_odom", Odometry, queue_size=5)
+        self.pub_seen = rospy.Publisher("platform/current_platform_position_in_ardrone", PointStamped, queue_size=5)
         rospy.Subscriber("groundtruth/landing_pad", PoseStamped, self.on_pad, queue_size=5)
         rospy.Subscriber("ardrone/ground_truth/state", Odometry, self.on_truth, queue_size=5)
         rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5)
@@ -52,13 +54,17 @@ class StandIn:
             old_stamp, old_pad = self.pad_history[-6]
             velocity = (pad - old_pad) / max(1e-3, stamp - old_stamp)
             velocity[2] = 0.0
-            seen = self.estimate + (pad - self.truth) + self.rng.normal(0.0, self.noise, 3)
-            self.queue.append((t + self.latency, stamp, seen, velocity))
+            relative = pad - self.truth + self.rng.normal(0.0, self.noise, 3)
+            self.queue.append((t + self.latency, stamp, self.estimate + relative, velocity, relative))
         while self.queue and self.queue[0][0] <= t:
-            _, stamp, seen, velocity = self.queue.popleft()
-            self.publish(stamp, seen, velocity)
+            _, stamp, seen, velocity, relative = self.queue.popleft()
+            self.publish(stamp, seen, velocity, relative)
 
-    def publish(self, stamp, position, velocity):
+    def publish(self, stamp, position, velocity, relative):
+        detection = PointStamped()
+        detection.header.stamp, detection.header.frame_id = rospy.Time.from_sec(stamp), "ardrone/base_link"
+        detection.point.x, detection.point.y, detection.point.z = relative  # world-aligned: only the stamp is used
+        self.pub_seen.publish(detection)
         odom = Odometry()
         odom.header.stamp, odom.header.frame_id = rospy.Time.from_sec(stamp), "world"
         odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z = position

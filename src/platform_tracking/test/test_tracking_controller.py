@@ -9,7 +9,7 @@ from platform_tracking.controller import (DroneState, PadPrediction, TrackingCon
                                           clamp_norm)
 from platform_tracking.params import TrackingParams
 
-NO_LEAD = TrackingParams(lookahead=0.0, integral_gain=0.0, acceleration_feedforward=0.0)
+NO_LEAD = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0)
 
 
 def drone(x=0.0, y=0.0, vx=0.0, vy=0.0, yaw=0.0):
@@ -64,21 +64,37 @@ def test_latency_is_compensated_by_reading_the_prediction_at_the_current_time():
 
 
 def test_lookahead_damps_the_closing_speed():
-    params = TrackingParams(integral_gain=0.0, acceleration_feedforward=0.0, lookahead=0.5)
+    params = TrackingParams(integral_gain=0.0, velocity_lead=0.0, lookahead=0.5)
     closing = TrackingController(params).world_velocity(0.0, drone(vx=1.0), still_pad(1.0, 0.0))
     assert closing[0] == pytest.approx(params.position_gain * (1.0 - 0.5 * 1.0))
 
 
-def test_the_lookahead_follows_the_predicted_path_not_a_straight_line():
-    times = [0.0, 0.5, 1.0]
-    pad = PadPrediction(0.0, (0.0, 0.0, 0.5), (1.0, 0.0, 0.0), times, [(0, 0, 0.5), (0.5, 0.2, 0.5), (1.0, 0.8, 0.5)])
-    params = TrackingParams(integral_gain=0.0, acceleration_feedforward=0.0, lookahead=0.5)
-    command = TrackingController(params).world_velocity(0.0, drone(vx=1.0), pad)
-    assert command[1] == pytest.approx(params.position_gain * 0.2)  # turning left ahead
+def circle_prediction(t0, speed=3.0, radius=10.0, horizon=2.0):
+    """The pad on a counter-clockwise circle around (0, radius), at (0, 0) heading +x at ``t0``."""
+    omega = speed / radius
+    times = [t0 + 0.1 * k for k in range(int(round(horizon / 0.1)) + 1)]
+    positions = [(radius * math.sin(omega * (tk - t0)), radius * (1 - math.cos(omega * (tk - t0))), 0.5)
+                 for tk in times]
+    return PadPrediction(t0, positions[0], (speed, 0.0, 0.0), times, positions)
+
+
+def test_on_a_circle_the_lookahead_does_not_pull_the_drone_inwards():
+    """Reading the pad ``L`` ahead on its curved path would add a steady inward pull of a L^2 / 2."""
+    params = TrackingParams(integral_gain=0.0, velocity_lead=0.0, lookahead=0.5)
+    pad = circle_prediction(0.0)
+    command = TrackingController(params).world_velocity(0.0, drone(vx=3.0), pad)
+    assert command[1] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_feed_forward_is_the_pad_velocity_velocity_lead_ahead_on_the_path():
+    params = TrackingParams(integral_gain=0.0, lookahead=0.0, velocity_lead=0.5)
+    command = TrackingController(params).world_velocity(0.0, drone(vx=3.0), circle_prediction(0.0))
+    turned = 0.3 * 0.5  # omega * lead
+    assert command == pytest.approx((3.0 * math.cos(turned), 3.0 * math.sin(turned)), abs=0.01)
 
 
 def test_integral_accumulates_is_clamped_and_frozen_on_request():
-    params = TrackingParams(lookahead=0.0, acceleration_feedforward=0.0, integral_gain=1.0, integral_speed_limit=0.3)
+    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0, integral_speed_limit=0.3)
     controller = TrackingController(params)
     for k in range(60):
         command = controller.world_velocity(k * 0.1, drone(), still_pad(0.1, 0.0, stamp=k * 0.1))
@@ -90,21 +106,44 @@ def test_integral_accumulates_is_clamped_and_frozen_on_request():
     assert controller.integral == pytest.approx((0.0, 0.0))
 
 
-def test_integral_is_frozen_while_the_pad_accelerates():
-    params = TrackingParams(lookahead=0.0, acceleration_feedforward=0.0, integral_gain=1.0)
+def accelerating_prediction(t0, x0, v0, acceleration, horizon=2.0):
+    times = [t0 + 0.1 * k for k in range(int(round(horizon / 0.1)) + 1)]
+    positions = [(x0 + v0 * (tk - t0) + 0.5 * acceleration * (tk - t0) ** 2, 0.0, 0.5) for tk in times]
+    return PadPrediction(t0, positions[0], (v0, 0.0, 0.0), times, positions)
+
+
+def test_integral_is_frozen_while_the_pad_speeds_up_or_brakes():
+    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0)
     controller = TrackingController(params)
-    integrals = []
-    for k in range(30):  # pad accelerating at 3 m/s^2
+    for k in range(30):  # pad 0.5 m ahead, speeding up at 3 m/s^2
         t = k * 0.05
-        controller.world_velocity(t, drone(), still_pad(0.5, 0.0, stamp=t, vx=3.0 * t))
-        integrals.append(controller.integral.copy())
-    assert controller.acceleration[0] == pytest.approx(3.0)
-    # Only the first samples, before the acceleration is measured over half a window, integrate.
-    assert integrals[-1] == pytest.approx(integrals[10])
+        controller.world_velocity(t, drone(), accelerating_prediction(t, 0.5, 1.0 + 3.0 * t, 3.0))
+    assert controller.integral == pytest.approx((0.0, 0.0))
 
 
-def test_acceleration_is_fed_forward_on_a_turn():
-    params = TrackingParams(lookahead=0.0, integral_gain=0.0, acceleration_feedforward=0.5)
+def test_the_integral_is_kept_along_and_across_the_pads_travel():
+    """On a circle the drone's shortfall is steady along and across the pad's travel, not in the world."""
+    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0)
+    controller = TrackingController(params)
+    speed, radius = 3.0, 10.0
+    for k in range(100):  # 10 s on the circle, the drone 0.2 m outside it the whole time
+        t = k * 0.1
+        angle = speed / radius * t
+        centre = np.array([0.0, radius])
+        pad_xy = centre + radius * np.array([math.sin(angle), -math.cos(angle)])
+        outward = (pad_xy - centre) / radius
+        times = [t + 0.1 * j for j in range(21)]
+        path = [(*(centre + radius * np.array([math.sin(speed / radius * tk), -math.cos(speed / radius * tk)])),
+                 0.5) for tk in times]
+        velocity = speed * np.array([math.cos(angle), math.sin(angle)])
+        pad = PadPrediction(t, path[0], (*velocity, 0.0), times, path)
+        controller.world_velocity(t, drone(*(pad_xy + 0.2 * outward), *velocity), pad)
+    # All of it across the travel, pointing inwards (left of +x travel is +y): 0.2 m for 10 s.
+    assert controller.integral == pytest.approx((0.0, 2.0), abs=0.05)
+
+
+def test_without_a_path_the_acceleration_is_fed_forward_on_a_turn():
+    params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.5)
     controller = TrackingController(params)
     for k in range(21):  # velocity turning from +x towards +y: acceleration (0, 0.4) m/s^2
         t = k * 0.05

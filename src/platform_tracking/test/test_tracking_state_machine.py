@@ -43,6 +43,7 @@ class Flight:
     def step(self, dt=1.0 / 30.0, **kw):
         self.t += dt
         kw.setdefault("navdata_state", Nav.HOVERING)
+        kw.setdefault("vision_age", 0.03)  # the camera sees the pad unless a test says otherwise
         self.out = self.sm.step(Inputs(self.t, **kw))
         return self.out
 
@@ -283,15 +284,27 @@ def test_landing_stops_descending_while_the_error_or_relative_speed_is_too_large
     assert out.command.vz == 0.0
 
 
-def test_landing_climbs_back_to_retry_height_when_the_error_grows_then_descends_again():
+def test_landing_climbs_while_the_error_is_too_large_for_its_height_then_descends_again():
     f = landing_flight(height=1.0)
-    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30, x=0.7))
+    limit = P.hold_max_error + P.hold_error_per_metre * 1.0    # the narrower view lower down
+    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30, x=limit + 0.05))
     assert f.state == State.LANDING and out.command.vz == pytest.approx(P.retry_climb_rate)
-    assert "re-try 1" in f.lines[-1]
-    out = f.step(drone=drone(height=1.5), pad=pad(f.t + 1 / 30, x=0.0))      # error gone, still climbing
-    assert out.command.vz == pytest.approx(P.retry_climb_rate)
-    out = f.step(drone=drone(height=P.retry_height), pad=pad(f.t + 1 / 30))
-    assert out.command.vz == pytest.approx(-P.landing_descent_rate) and "descending again" in f.lines[-1]
+    assert "climbing to keep the pad in view" in f.lines[-1]
+    out = f.step(drone=drone(height=3.0), pad=pad(f.t + 1 / 30, x=limit + 0.05))   # higher up it is in view
+    assert out.command.vz == 0.0
+    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30, x=0.0))
+    assert out.command.vz == pytest.approx(-P.landing_descent_rate)
+
+
+def test_landing_climbs_for_a_wider_view_when_the_camera_has_lost_the_pad():
+    f = landing_flight(height=1.0)
+    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30), vision_age=P.vision_timeout + 0.1)
+    assert out.command.vz == pytest.approx(P.retry_climb_rate) and "pad not seen" in f.lines[-1]
+    out = f.step(drone=drone(height=P.retry_height + 0.5), pad=pad(f.t + 1 / 30), vision_age=None)
+    assert out.command.vz == 0.0   # high enough: hold
+    assert sum("pad not seen" in line for line in f.lines) == 1   # said once per loss
+    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30), vision_age=0.03)
+    assert out.command.vz == pytest.approx(-P.landing_descent_rate)
 
 
 def test_landing_back_to_tracking_when_the_error_exceeds_abort_error():
@@ -314,11 +327,58 @@ def test_landing_stops_at_the_gate_height_instead_of_descending_blindly():
 
 def test_touchdown_is_committed_only_after_gate_ready_time_inside_the_gate():
     f = landing_flight(height=P.gate_height)
-    sends = [o.send_land for o in f.run(P.gate_ready_time - 0.05, make=fresh(x=0.05, height=P.gate_height))]
-    assert not any(sends)
+    f.run(P.gate_ready_time - 0.05, make=fresh(x=0.05, height=P.gate_height))
+    assert not f.sm.committed
     outs = f.run(0.2, make=fresh(x=0.05, height=P.gate_height))
-    assert sum(o.send_land for o in outs) == 1
     assert f.state == State.LANDING and f.sm.committed and "touchdown committed" in f.lines[-1]
+    assert outs[-1].command.vz == pytest.approx(-P.final_descent_rate) and not any(o.send_land for o in outs)
+
+
+def test_touchdown_may_be_committed_while_still_descending_from_commit_height():
+    f = landing_flight(height=P.commit_height)
+    outs = f.run(P.gate_ready_time + 0.1, make=fresh(x=0.02, height=P.commit_height - 0.05))
+    assert f.sm.committed and outs[-1].command.vz == pytest.approx(-P.final_descent_rate)
+    g = landing_flight(height=P.commit_height + 0.2)
+    g.run(1.0, make=fresh(x=0.02, height=P.commit_height + 0.2))
+    assert not g.sm.committed
+
+
+def test_ardrone_land_is_sent_at_land_height_during_the_final_descent():
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    out = f.step(drone=drone(height=0.2), pad=pad(f.t + 1 / 30))
+    assert not out.send_land and out.command.vz == pytest.approx(-P.final_descent_rate)
+    out = f.step(drone=drone(height=P.land_height - 0.01), pad=pad(f.t + 1 / 30))
+    assert out.send_land and out.command.vz == 0.0 and "ardrone/land sent" in f.lines[-1]
+
+
+def test_final_descent_is_called_off_when_the_error_grows():
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    out = f.step(drone=drone(height=0.25), pad=pad(f.t + 1 / 30, x=P.commit_abort_error + 0.05))
+    assert not out.send_land and out.command.vz == pytest.approx(P.retry_climb_rate)
+    assert "commit_abort_error" in f.lines[-1] and not f.sm.committed
+
+
+def test_touchdown_is_not_committed_without_a_fresh_detection():
+    f = landing_flight(height=P.gate_height)
+    f.run(1.0, make=fresh(height=P.gate_height), vision_age=P.gate_vision_age + 0.05)
+    assert not f.sm.committed
+
+
+def test_touchdown_waits_while_the_pad_brakes_or_speeds_up_without_timing_out():
+    def braking(t):
+        stamp = t - 0.05
+        times = [stamp + 0.1 * k for k in range(21)]
+        # 1 m/s^2 deceleration from 2 m/s, the drone on the pad's current position and speed
+        positions = [np.array([2.0 * (tk - t) - 0.5 * (tk - t) ** 2, 0.0, PAD_Z]) for tk in times]
+        prediction = PadPrediction(stamp, positions[0], np.array([2.05, 0.0, 0.0]), times, positions)
+        return {"drone": drone(height=P.gate_height, vx=2.0), "pad": prediction}
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_timeout + 1.0, make=braking)
+    assert not f.sm.committed and not f.sm.retrying   # waiting, not giving up
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    assert f.sm.committed
 
 
 def test_touchdown_is_not_committed_while_the_relative_speed_is_large():
@@ -336,9 +396,11 @@ def test_gate_timeout_starts_a_retry():
 
 
 def committed_flight():
+    """Committed and down to land_height: ardrone/land sent."""
     f = landing_flight(height=P.gate_height)
     f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
     assert f.sm.committed
+    assert f.step(drone=drone(height=P.land_height - 0.02), pad=pad(f.t + 1 / 30)).send_land
     return f
 
 
@@ -350,15 +412,15 @@ def test_committed_descent_keeps_tracking_horizontally_and_ignores_a_stale_predi
     f.run(P.gate_ready_time + 0.2, make=moving)
     assert f.sm.committed
     last = pad(f.t, x=f.t, vx=1.0, age=0.0)  # the camera loses the pad this close: the prediction ages
-    outs = f.run(1.5, make=lambda t: {"drone": drone(x=t, height=0.2, vx=1.0), "pad": last},
-                 navdata_state=Nav.LANDING)
+    outs = f.run(1.5, make=lambda t: {"drone": drone(x=t, height=0.2, vx=1.0), "pad": last}, vision_age=None)
     assert f.state == State.LANDING                      # no relocating while committed
-    assert outs[-1].command.vx == pytest.approx(1.0, abs=0.1) and outs[-1].command.vz == 0.0
+    assert outs[-1].command.vx == pytest.approx(1.0, abs=0.1)
+    assert outs[-1].command.vz == pytest.approx(-P.final_descent_rate)
 
 
 def test_committed_land_is_sent_again_when_not_acknowledged():
     f = committed_flight()
-    outs = f.run(P.land_ack_timeout + 0.2, make=fresh(height=P.gate_height), navdata_state=Nav.FLYING)
+    outs = f.run(P.land_ack_timeout + 0.2, make=fresh(height=P.land_height - 0.02), navdata_state=Nav.FLYING)
     assert sum(o.send_land for o in outs) == 1 and "sending it again" in f.lines[-1]
 
 

@@ -4,17 +4,19 @@ The velocity command is built in ``world`` and rotated into the *heading frame* 
 (``ardrone/cmd_vel``: linear.x forward, linear.y left of the drone's yaw-only frame):
 
     v_cmd = v_ff + kp * e + ki * integral(e)            (capped)
-    e     = pad(t + L) - (drone(t) + v_drone * L)
-    v_ff  = v_pad + a_pad * (age + T_v)
+    e     = pad(t) - drone(t) + L * (v_pad(t) - v_drone)
+    v_ff  = v_pad(t + T_v)
 
 - ``pad(t)`` comes from the *predicted* path (kalman_prediction_path); the prediction is ``age``
   seconds old when it arrives, so it is read at the current time, not at its stamp: that is the
   pipeline latency compensation.
-- ``L`` (lookahead) compares where pad and drone will be a little later; for straight motion it is
-  exactly a damping term on the relative velocity, on a curve it also anticipates the turn.
-- ``v_ff``: the pad's velocity, advanced by its acceleration over the prediction's age plus ``T_v``,
-  the drone's velocity-loop response time, so that on a circle the drone turns with the pad instead
-  of lagging behind it.
+- ``L`` (lookahead) compares where pad and drone will be a little later at their present velocities:
+  a damping term on the relative velocity. (Reading the pad ``L`` ahead on its curved path instead
+  would add a steady inward pull of a L^2 / 2 on every turn.)
+- ``v_ff``: the pad's velocity ``T_v`` ahead (``velocity_lead``, the drone's velocity-loop response
+  time), read off the predicted path, so that on a circle the drone turns with the pad instead of
+  lagging behind it (a car on a 50 m circle at 10 m/s would otherwise pull it 0.7 m outwards). Without
+  a path, the velocity is advanced by an acceleration measured from successive predictions.
 """
 import bisect
 import collections
@@ -74,6 +76,26 @@ class PadPrediction:
     def age(self, t):
         return t - self.stamp
 
+    def path_velocity_at(self, t, half_span=0.05):
+        """Velocity at ``t`` by a central difference along the predicted path (the predicted velocity at
+        its start, blended into it over ``half_span``); None beyond the path's end."""
+        times = self.path_times
+        if len(times) < 2 or t + half_span > times[-1]:
+            return None
+        if t < times[0] + half_span:
+            ahead = self.path_velocity_at(times[0] + half_span, half_span)
+            w = max(0.0, t - times[0]) / half_span
+            return (1.0 - w) * self.velocity + w * ahead
+        return (self.position_at(t + half_span) - self.position_at(t - half_span)) / (2.0 * half_span)
+
+    def speed_change_at(self, t, span=0.3):
+        """Rate of change of the pad's speed over the next ``span`` seconds of the path [m/s^2] (braking
+        < 0); 0 where the path does not reach. Turning at constant speed does not count."""
+        v0, v1 = self.path_velocity_at(t), self.path_velocity_at(t + span)
+        if v0 is None or v1 is None:
+            return 0.0
+        return float(np.hypot(*v1[:2]) - np.hypot(*v0[:2])) / span
+
     def position_at(self, t):
         """Predicted pad position at time ``t``: interpolated along the path, extrapolated with the
         velocity before its start and beyond its end."""
@@ -102,7 +124,10 @@ class TrackingController:
 
     def __init__(self, params: TrackingParams):
         self.p = params
+        # The integral lives in the pad's travel frame (along, across its velocity): what the drone falls
+        # short by on a turn (drag, its own loop's lag) is constant there, while in the world it rotates.
         self.integral = np.zeros(2)
+        self.travel_heading = 0.0     # direction of the pad's velocity, kept while it stands still [rad]
         self.last_time = None
         self.velocity_history = collections.deque()  # (stamp, pad velocity) of recent predictions
         self.acceleration = np.zeros(2)
@@ -119,10 +144,14 @@ class TrackingController:
         return error, relative_velocity
 
     def pad_velocity(self, t, pad, ahead=0.0):
-        """Pad velocity at ``t + ahead`` from the last prediction and the acceleration estimate. The
-        acceleration is extrapolated no further than the window it was measured over: an old
-        prediction must not turn into an ever-growing speed command."""
+        """Pad velocity at ``t + ahead``: from the predicted path where it reaches, else from the last
+        prediction's velocity and the acceleration estimate. The acceleration is extrapolated no
+        further than the window it was measured over: an old prediction must not turn into an
+        ever-growing speed command."""
         self._observe(pad)
+        on_path = pad.path_velocity_at(t + ahead)
+        if on_path is not None:
+            return on_path[:2]
         horizon = min(max(0.0, pad.age(t)), self.p.acceleration_window) + ahead
         return pad.velocity[:2] + self.acceleration * horizon
 
@@ -148,20 +177,25 @@ class TrackingController:
         """Horizontal velocity command in the world frame. ``accumulate`` False freezes the integral
         (it still applies: at speed it holds what the drone's own velocity loop falls short by)."""
         p = self.p
-        lookahead = p.lookahead
-        target = pad.position_at(t + lookahead)[:2]
-        error = target - (drone.position[:2] + drone.velocity[:2] * lookahead)
+        error, relative_velocity = self.errors(t, drone, pad)
+        error = error + p.lookahead * relative_velocity
         dt = 0.0 if self.last_time is None else max(0.0, min(0.2, t - self.last_time))
         self.last_time = t
         # The integral is for steady deficits (drag, the drone's own velocity loop falling short at
-        # speed); while the pad accelerates hard the error is a transient and integrating it would
-        # only overshoot afterwards.
-        steady = np.hypot(*self.acceleration) <= p.integral_max_pad_acceleration
+        # speed, on a straight line or a turn); while the pad brakes or speeds up hard the error is a
+        # transient and integrating it would only overshoot afterwards.
+        pad_velocity = self.pad_velocity(t, pad)
+        if np.hypot(*pad_velocity) > 0.3:
+            self.travel_heading = float(np.arctan2(pad_velocity[1], pad_velocity[0]))
+        c, s = np.cos(self.travel_heading), np.sin(self.travel_heading)
+        to_world = np.array([[c, -s], [s, c]])
+        steady = abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration
         if accumulate and steady and np.hypot(*error) < p.integral_error_limit and p.integral_gain > 0.0:
-            self.integral += error * dt
+            self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)
-        correction = clamp_norm(p.position_gain * error + p.integral_gain * self.integral, p.max_correction_speed)
-        feed = self.pad_velocity(t, pad, ahead=p.acceleration_feedforward)
+        correction = clamp_norm(p.position_gain * error + p.integral_gain * (to_world @ self.integral),
+                                p.max_correction_speed)
+        feed = self.pad_velocity(t, pad, ahead=p.velocity_lead)
         return clamp_norm(feed + correction, p.max_horizontal_speed)
 
     @staticmethod

@@ -6,10 +6,12 @@ drone_estimator  ardrone/imu, ardrone/navdata, ardrone/gps/odom, ardrone/altimet
                  ground truth; twist.angular the body rates from the IMU).
 
 platform_tracking ardrone/odom_estimate, kalman_prediction_path, kalman_platform_odom, ardrone/navdata,
-                 ardrone/sonar_height, ardrone/imu, landing_allowed (std_msgs/Bool, default true) and the
+                 ardrone/sonar_height, ardrone/imu, platform/current_platform_position_in_ardrone (only
+                 its stamp: when the pad was last seen), landing_allowed (std_msgs/Bool, default true) and the
                  operator requests -> ardrone/cmd_vel at rate_hz (sim time), ardrone/takeoff and
                  ardrone/land as one-shot actions, platform_tracking/state (std_msgs/String, latched,
-                 on every change).
+                 on every change), platform_tracking/target (geometry_msgs/PointStamped, world: where the
+                 pad is believed to be at each step, for rviz and the flight analysis).
 
 Operator requests: platform_tracking/command (std_msgs/String: takeoff | land | force_land) is the
 unambiguous way. The thesis topics work too: ardrone/force_land (Empty); ardrone/takeoff and
@@ -27,7 +29,7 @@ import threading
 
 import numpy as np
 import rospy
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PointStamped, Twist
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
 from nav_msgs.msg import Odometry, Path
@@ -211,6 +213,7 @@ class TrackingNode:
         self.prediction = None        # PadPrediction built from the two, cached until one changes
         self.requests = set()
         self.landing_allowed = True
+        self.seen_at = None           # stamp of the image of the latest pad detection
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -218,6 +221,7 @@ class TrackingNode:
         self.pub_takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
         self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
         self.pub_state = rospy.Publisher("platform_tracking/state", String, queue_size=1, latch=True)
+        self.pub_target = rospy.Publisher("platform_tracking/target", PointStamped, queue_size=1)
         rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5)
         rospy.Subscriber("kalman_prediction_path", Path, self.on_path, queue_size=5)
         rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5)
@@ -225,6 +229,7 @@ class TrackingNode:
         rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5)
         rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=5)
         rospy.Subscriber("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
+        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, self.on_detection, queue_size=5)
         rospy.Subscriber("platform_tracking/command", String, self.on_command, queue_size=10)
         rospy.Subscriber("ardrone/takeoff", Empty, lambda m: self.on_thesis_request(m, "takeoff"), queue_size=5)
         rospy.Subscriber("ardrone/land", Empty, lambda m: self.on_thesis_request(m, "land"), queue_size=5)
@@ -288,6 +293,10 @@ class TrackingNode:
         with self.lock:
             self.imu_yaw = (stamp_of(msg), yaw_from_quaternion(q.w, q.x, q.y, q.z))
 
+    def on_detection(self, msg):
+        with self.lock:
+            self.seen_at = stamp_of(msg)
+
     def on_landing_allowed(self, msg):
         with self.lock:
             if bool(msg.data) != self.landing_allowed:
@@ -328,7 +337,8 @@ class TrackingNode:
                 drone = DroneState(state.position, state.velocity, yaw, self.sonar).moved(t - self.estimate[0])
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
-                            force_land="force_land" in self.requests, landing_allowed=self.landing_allowed)
+                            force_land="force_land" in self.requests, landing_allowed=self.landing_allowed,
+                            vision_age=None if self.seen_at is None else t - self.seen_at)
             self.requests.clear()
         before = self.machine.state
         out = self.machine.step(inputs)
@@ -343,6 +353,11 @@ class TrackingNode:
             self.pub_cmd.publish(twist)
         if out.state != before:
             self.pub_state.publish(String(data=out.state.value))
+        if out.target is not None:
+            target = PointStamped()
+            target.header.stamp, target.header.frame_id = now, "world"
+            target.point.x, target.point.y, target.point.z = (float(v) for v in out.target)
+            self.pub_target.publish(target)
         self.lockstep.ack(now)
 
     def spin(self):

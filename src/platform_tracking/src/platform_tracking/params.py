@@ -104,9 +104,9 @@ class TrackingParams:
     integral_gain: float = spec(0.5, 0.0, 20.0, "1/s^2")
     integral_speed_limit: float = spec(2.0, 0.0, 20.0, "m/s")
     integral_error_limit: float = spec(2.0, 0.0, 100.0, "m")
-    integral_max_pad_acceleration: float = spec(1.0, 0.0, 100.0, "m/s^2")
+    integral_max_pad_acceleration: float = spec(0.5, 0.0, 100.0, "m/s^2")
     lookahead: float = spec(0.3, 0.0, 5.0, "s")
-    acceleration_feedforward: float = spec(0.2, 0.0, 5.0, "s")
+    velocity_lead: float = spec(0.15, 0.0, 5.0, "s")
     acceleration_window: float = spec(0.5, 0.0, 10.0, "s")
     max_correction_speed: float = spec(3.0, 0.0, 40.0, "m/s")
     max_horizontal_speed: float = spec(20.0, 0.1, 40.0, "m/s")
@@ -124,15 +124,23 @@ class TrackingParams:
     landing_descent_rate: float = spec(0.3, 0.05, 3.0, "m/s")
     descend_max_error: float = spec(0.25, 0.01, 10.0, "m")
     descend_max_relative_speed: float = spec(0.5, 0.01, 10.0, "m/s")
-    hold_max_error: float = spec(0.5, 0.01, 10.0, "m")
+    hold_max_error: float = spec(0.35, 0.01, 10.0, "m")
+    hold_error_per_metre: float = spec(0.4, 0.0, 10.0, "m/m")
     retry_climb_rate: float = spec(0.5, 0.05, 5.0, "m/s")
     retry_height: float = spec(2.0, 0.2, 50.0, "m")
     abort_error: float = spec(1.5, 0.05, 50.0, "m")
     gate_height: float = spec(0.35, 0.05, 5.0, "m")
+    commit_height: float = spec(0.6, 0.05, 5.0, "m")
     gate_error: float = spec(0.1, 0.01, 5.0, "m")
     gate_relative_speed: float = spec(0.25, 0.01, 10.0, "m/s")
     gate_ready_time: float = spec(0.2, 0.0, 10.0, "s")
     gate_timeout: float = spec(4.0, 0.1, 120.0, "s")
+    vision_timeout: float = spec(0.3, 0.01, 10.0, "s")
+    gate_vision_age: float = spec(0.1, 0.0, 10.0, "s")
+    gate_max_speed_change: float = spec(0.3, 0.0, 50.0, "m/s^2")
+    final_descent_rate: float = spec(1.0, 0.05, 3.0, "m/s")
+    land_height: float = spec(0.12, 0.0, 5.0, "m")
+    commit_abort_error: float = spec(0.2, 0.01, 5.0, "m")
     land_ack_timeout: float = spec(1.0, 0.05, 30.0, "s")
 
     def check(self, source="tracking parameters"):
@@ -144,6 +152,14 @@ class TrackingParams:
         if not self.descend_max_error <= self.hold_max_error <= self.abort_error:
             problems.append("expected descend_max_error <= hold_max_error <= abort_error, got %g, %g, %g m" % (
                 self.descend_max_error, self.hold_max_error, self.abort_error))
+        if not self.gate_height <= self.commit_height < self.retry_height:
+            problems.append("expected gate_height <= commit_height < retry_height, got %g, %g, %g m" % (
+                self.gate_height, self.commit_height, self.retry_height))
+        if not self.land_height < self.gate_height:
+            problems.append("expected land_height < gate_height, got %g, %g m" % (self.land_height, self.gate_height))
+        if not self.gate_error < self.commit_abort_error:
+            problems.append("expected gate_error < commit_abort_error, got %g, %g m" % (
+                self.gate_error, self.commit_abort_error))
         if not self.gate_height < self.retry_height <= self.nominal_height:
             problems.append("expected gate_height < retry_height <= nominal_height, got %g, %g, %g m" % (
                 self.gate_height, self.retry_height, self.nominal_height))

@@ -7,11 +7,15 @@ States and what the drone does in each (heights are above the pad, measured from
   ``nominal_height`` while it already follows the pad horizontally whenever a prediction is fresh.
 - TRACKING: PID on the predicted pad position at ``nominal_height`` (see controller.py).
 - LANDING: descends at ``landing_descent_rate`` while tracking, but only while the horizontal error
-  and the relative velocity are small; it holds its height while they are not, and climbs back to
-  ``retry_height`` to re-try when the error grows or the touchdown gate is not met in time. At
-  ``gate_height`` it commits to the touchdown only once error and relative speed have stayed inside
-  the gate for ``gate_ready_time``: then ``ardrone/land`` is sent (the drone descends by itself,
-  still obeying the horizontal command, which keeps tracking) and there is no way back.
+  and the relative velocity are small; it holds its height while they are not, and climbs while the
+  error is so large for its height that the pad could leave the (narrower, lower down) view, or
+  while the camera has not seen the pad for ``vision_timeout`` (up to ``retry_height``). At
+  ``commit_height`` and below (waiting at ``gate_height`` if need be) it commits to the touchdown once
+  error and relative speed have stayed inside the gate, with the pad seen within ``gate_vision_age``
+  and its speed steady, for ``gate_ready_time``: it then descends at ``final_descent_rate``, still tracking, and
+  sends ``ardrone/land`` at ``land_height`` (the drone settles by itself, still obeying the horizontal
+  command); an error above ``commit_abort_error`` before that calls the touchdown off. A gate not met
+  within ``gate_timeout``, or a touchdown called off, climbs back to ``retry_height`` to re-try.
 - RELOCATING: the pad has not been seen for ``lost_timeout``: climb to ``relocate_height`` for a
   wider view and fly to the last predicted position (following the prediction for as long as it
   reaches, then holding there); hover in place when nothing was ever predicted.
@@ -72,6 +76,7 @@ class Inputs:
     land: bool = False
     force_land: bool = False
     landing_allowed: bool = True
+    vision_age: Optional[float] = None      # time since the image of the latest pad detection [s]; None: never
 
 
 @dataclasses.dataclass
@@ -85,6 +90,7 @@ class Outputs:
     log: List[str] = dataclasses.field(default_factory=list)
     error: Optional[float] = None            # horizontal distance drone - pad now [m]
     height: Optional[float] = None           # height above the pad (feet) used for control [m]
+    target: Optional[np.ndarray] = None      # where the pad is believed to be now, world (x, y, z) [m]
 
 
 class TrackingStateMachine:
@@ -104,6 +110,8 @@ class TrackingStateMachine:
         self.committed = False
         self.land_sent_at = None
         self.retrying = False
+        self.climbing = False
+        self.blind_since_logged = False
         self.retries = 0
         self.at_gate_since = None
         self.ready_since = None
@@ -125,6 +133,8 @@ class TrackingStateMachine:
         self.committed = False
         self.land_sent_at = None
         self.retrying = False
+        self.climbing = False
+        self.blind_since_logged = False
         self.at_gate_since = None
         self.ready_since = None
         self.saw_landing_nav = False
@@ -149,11 +159,6 @@ class TrackingStateMachine:
     def _send_land(self, t):
         self._out.send_land = True
         self.land_sent_at = t
-
-    def _commit(self, t, reason):
-        self.committed = True
-        self._send_land(t)
-        self._event("touchdown committed: ardrone/land sent (%s)" % reason)
 
     # ----- helpers -------------------------------------------------------------------------------
     def _fresh(self, pad, t, max_age):
@@ -218,6 +223,8 @@ class TrackingStateMachine:
             handler(inputs)
         if self.state == State.LANDED:
             self._out.command = None
+        elif self.last_pad is not None and self.last_pad.age(t) <= self.p.lost_timeout + 2.0:
+            self._out.target = self.last_pad.position_at(t)
         self._out.state = self.state
         return self._out
 
@@ -318,10 +325,16 @@ class TrackingStateMachine:
         p, t, drone, pad = self.p, inp.time, inp.drone, self.last_pad
         if self._touched_down(inp):
             return
-        if self.committed:
+        if self.land_sent_at is not None:
             return self._final_descent(inp)
         if self._external_landing(inp):
             return self._final_descent(inp)
+        if self.committed and pad is not None and pad.age(t) <= p.lost_timeout + 2.0:
+            # The last half second: the camera loses the pad this close, the prediction carries on.
+            error, _ = self.controller.errors(t, drone, pad)
+            height = self._height(drone, pad, t)
+            self._out.error, self._out.height = float(np.hypot(*error)), height
+            return self._fast_descent(inp, self._out.error, height)
         if not self._fresh(pad, t, p.lost_timeout):
             self._transition(State.RELOCATING, "target lost during the descent", t)
             return self._relocating(inp)
@@ -336,47 +349,93 @@ class TrackingStateMachine:
             return self._tracking(inp)
         height = self._height(drone, pad, t)
         self._out.error, self._out.height = distance, height
-        in_gate = distance < p.gate_error and relative_speed < p.gate_relative_speed
+        # The prediction coasts through missed frames, but it cannot know that the vehicle brakes or turns
+        # meanwhile: low down, only a pad seen right now is good enough to go lower.
+        seen = inp.vision_age is not None and inp.vision_age <= p.vision_timeout
+        if not seen and not self.blind_since_logged:
+            self._event("pad not seen for %s: %s" % (
+                "ever" if inp.vision_age is None else "%.2f s" % inp.vision_age,
+                "climbing for a wider view" if height < p.retry_height else "holding the height"))
+        self.blind_since_logged = not seen
+        # A vehicle that brakes or speeds up stops doing so abruptly (at rest, at its cruise speed), and a
+        # touchdown during that jolt misses: wait for it to run at a steady speed (turning is fine).
+        steady = abs(pad.speed_change_at(t)) <= p.gate_max_speed_change
+        on_target = distance < p.gate_error and relative_speed < p.gate_relative_speed and \
+            inp.vision_age is not None and inp.vision_age <= p.gate_vision_age
+        in_gate = on_target and steady
         at_gate = height <= p.gate_height + 0.05
+        # The touchdown may start from commit_height down, without stopping: already descending, the drone
+        # spends less time below the height where the camera loses the pad.
+        may_commit = height <= p.commit_height + 0.05
+        # Lower down the view is narrower: the error that risks losing the pad from view shrinks with height.
+        climb_error = p.hold_max_error + p.hold_error_per_metre * height
 
         if self.retrying:
             if height >= p.retry_height - 0.05:
                 self.retrying = False
                 self._event("re-try %d: at %.2f m, descending again" % (self.retries, height))
-        elif distance > p.hold_max_error:
-            self._start_retry(t, "error %.2f m > hold_max_error %.2f m" % (distance, p.hold_max_error), height)
-        elif at_gate:
-            self.at_gate_since = t if self.at_gate_since is None else self.at_gate_since
+        elif may_commit:
             self.ready_since = (t if self.ready_since is None else self.ready_since) if in_gate else None
             if self.ready_since is not None and t - self.ready_since >= p.gate_ready_time:
-                self._commit(t, "height %.2f m, error %.3f m, relative speed %.2f m/s" % (
-                    height, distance, relative_speed))
-                return self._final_descent(inp)
-            if t - self.at_gate_since > p.gate_timeout:
-                self._start_retry(t, "not inside the touchdown gate for %.1f s (error %.2f m, relative speed "
-                                  "%.2f m/s)" % (p.gate_timeout, distance, relative_speed), height)
+                self.committed = True
+                self._event("touchdown committed: descending at %.1f m/s (height %.2f m, error %.3f m, relative "
+                            "speed %.2f m/s)" % (p.final_descent_rate, height, distance, relative_speed))
+                return self._fast_descent(inp, distance, height)
+            if at_gate:
+                # The gate timeout is for a drone that cannot keep on target, not for waiting out a
+                # vehicle's change of speed while it does.
+                self.at_gate_since = t if self.at_gate_since is None or (on_target and not steady) \
+                    else self.at_gate_since
+                if t - self.at_gate_since > p.gate_timeout:
+                    self._start_retry(t, "not inside the touchdown gate for %.1f s (error %.2f m, relative speed "
+                                      "%.2f m/s)" % (p.gate_timeout, distance, relative_speed), height)
         else:
             self.at_gate_since = self.ready_since = None
 
-        if self.retrying:
+        climbing = not self.retrying and seen and distance > climb_error
+        if climbing and not self.climbing:
+            self._event("error %.2f m > %.2f m at %.2f m: climbing to keep the pad in view" % (
+                distance, climb_error, height))
+        self.climbing = climbing
+        if self.retrying or climbing:
             vz = p.retry_climb_rate
+        elif not seen:
+            vz = p.retry_climb_rate if height < p.retry_height else 0.0
         elif distance <= p.descend_max_error and relative_speed <= p.descend_max_relative_speed and not at_gate:
             vz = -p.landing_descent_rate if height > p.gate_height + 0.1 else \
                 climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
         elif at_gate:
             vz = climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
         else:
-            vz = 0.0  # outside the descent cone: stop descending, let the tracking catch up
+            vz = 0.0  # outside the descent cone: hold the height, let the tracking catch up
         self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
 
     def _start_retry(self, t, reason, height):
         self.retrying = True
+        self.committed = False
         self.retries += 1
         self.at_gate_since = self.ready_since = None
         self._event("re-try %d: %s; climbing from %.2f m to %.2f m" % (self.retries, reason, height, self.p.retry_height))
 
+    def _fast_descent(self, inp, distance, height):
+        """Committed: the last few decimetres at final_descent_rate while tracking, so the pad has little
+        time to move unseen; ardrone/land at land_height. Until then a growing error still calls it off."""
+        p, t = self.p, inp.time
+        if distance > p.commit_abort_error:
+            self._start_retry(t, "error %.2f m > commit_abort_error %.2f m during the final descent" % (
+                distance, p.commit_abort_error), height)
+            self._out.command = self._command(self._tracking_xy(t, inp.drone, self.last_pad), p.retry_climb_rate,
+                                              inp.drone.yaw)
+            return
+        if height <= p.land_height:
+            self._send_land(t)
+            self._event("ardrone/land sent at %.2f m (error %.3f m)" % (height, distance))
+            return self._final_descent(inp)
+        self._out.command = self._command(self._tracking_xy(t, inp.drone, self.last_pad), -p.final_descent_rate,
+                                          inp.drone.yaw)
+
     def _final_descent(self, inp):
-        """Committed: the drone descends by itself; keep the horizontal tracking, from the last
+        """Land sent: the drone descends by itself; keep the horizontal tracking, from the last
         prediction extrapolated if the camera no longer sees the pad this close."""
         p, t, drone, pad = self.p, inp.time, inp.drone, self.last_pad
         if inp.navdata_state not in (Nav.LANDING, Nav.LANDED) and self.land_sent_at is not None \
