@@ -109,10 +109,10 @@ def suite():
         expect=stays("wind_critical", "no_go"), description="critical wind: no take-off")
     add("adverse_wind_13_in_flight", path="circle", events=in_flight("wind_speed", 13.0),
         expect=emergency("wind_critical"), description="critical wind in flight: Flag #1")
-    add("adverse_wind_9_persists", path="circle", events=in_flight("wind_speed", 9.0),
+    add("adverse_wind_11_persists", path="circle", events=in_flight("wind_speed", 11.0),
         expect=emergency("wind_strong"), description="Flag #3: three re-checks, still windy => emergency")
-    add("adverse_wind_9_clears", path="circle",
-        events=in_flight("wind_speed", 9.0) + in_flight("wind_speed", 3.0, at_s=15.0),
+    add("adverse_wind_11_clears", path="circle",
+        events=in_flight("wind_speed", 11.0) + in_flight("wind_speed", 3.0, at_s=15.0),
         expect=lands_despite("wind_strong", "continue"), description="Flag #3: clears before the third check")
     add("adverse_cold_0", path="circle", conditions={"temp": 0.0},
         expect=lands_despite("temp_cold", "warn"), description="Flag #2: warn and go on")

@@ -46,7 +46,7 @@ class FlagsTest(unittest.TestCase):
 
     def test_3_flag3_cleared_before_the_third_check_goes_on(self):
         h = self.h
-        t0 = h.set_condition("wind_speed", 9.0)
+        t0 = h.set_condition("wind_speed", 11.0)
         d = h.wait_decision("wind_strong", "recheck", t0)
         self.assertEqual(d["flag"], 3)
         self.assertLess(d["t"] - t0, REACTION_LIMIT)
@@ -64,7 +64,7 @@ class FlagsTest(unittest.TestCase):
 
     def test_4_flag3_persisting_ends_in_the_emergency_landing(self):
         h = self.h
-        t0 = h.set_condition("wind_speed", 9.0)
+        t0 = h.set_condition("wind_speed", 11.0)
         first = h.wait_decision("wind_strong", "recheck", t0)
         final = h.wait_decision("wind_strong", "emergency_landing", t0)
         actions = [d["action"] for d in h.decisions_of("wind_strong", t0)]

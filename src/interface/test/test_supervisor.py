@@ -179,7 +179,7 @@ def test_flag2_warns_and_the_flight_goes_on(flying):
 # ----- Flag #3 ---------------------------------------------------------------------------------------
 def test_flag3_three_rechecks_then_emergency_landing(flying):
     start = flying.t
-    flying.run(0.1, wind_speed=9.0)
+    flying.run(0.1, wind_speed=11.0)
     wind = [d for d in flying.decisions if d["condition"] == "wind_strong"]
     assert [d["action"] for d in wind] == ["recheck"] and wind[0]["flag"] == 3
     flying.run(5.85)
@@ -194,7 +194,7 @@ def test_flag3_three_rechecks_then_emergency_landing(flying):
 
 
 def test_flag3_cleared_before_the_third_check_goes_on(flying):
-    flying.run(0.1, wind_speed=9.0)
+    flying.run(0.1, wind_speed=11.0)
     flying.run(4.5)                       # re-checks 1 and 2 found it
     decisions = flying.run(0.1, wind_speed=3.0)
     assert actions(decisions, "wind_strong") == ["continue"]
@@ -218,7 +218,7 @@ def test_flag3_recheck_interval_and_count_are_settings():
 
 # ----- go / no-go with reasons -------------------------------------------------------------------------
 @pytest.mark.parametrize("change, row, reason_text", [
-    ({"wind_speed": 9.0}, "wind_strong", "weather"),
+    ({"wind_speed": 11.0}, "wind_strong", "weather"),
     ({"platform_speed": 18.0}, "platform_too_fast", "platform too fast for the drone"),
     ({"target_lost_s": 6.0}, "target_lost", "target lost"),
     ({"drone_battery": 39.0}, "drone_battery_landing", "battery"),
