@@ -89,3 +89,13 @@ def test_outcomes():
     assert scoring.outcome(touchdown(ground), None, True) == ("emergency_landed", None)
     assert scoring.outcome(touchdown(ground), None, False) == ("landed_off_pad", None)
     assert scoring.outcome(touchdown(scoring.SURFACE_VEHICLE), None, False) == ("landed_off_pad", None)
+
+
+def test_launch_arguments_carry_every_condition_of_the_scenario(tmp_path):
+    from interface import runner
+    text = SPEC_EXAMPLE.replace("temp: 15}", "temp: 15, drone_speed: 18.0}")
+    args = dict(a.split(":=", 1) for a in runner.launch_arguments(scenario.load(write(tmp_path, text))))
+    assert args["vehicle"] == "car" and args["speed"] == "10.0" and args["seed"] == "7"
+    assert args["wind_speed"] == "2.0" and args["wind_gust"] == "1.0" and args["drone_speed"] == "18.0"
+    assert "drone_speed" not in dict(a.split(":=", 1) for a in runner.launch_arguments(
+        scenario.load(write(tmp_path, SPEC_EXAMPLE, "plain.yaml"))))

@@ -33,6 +33,8 @@ def launch_arguments(s):
     }
     if start != "on_pad":
         args.update(start_x=start["x"], start_y=start["y"], start_z=start["z"])
+    if "drone_speed" in c:
+        args["drone_speed"] = c["drone_speed"]
     return ["%s:=%s" % (k, v) for k, v in args.items()]
 
 
