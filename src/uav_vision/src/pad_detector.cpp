@@ -205,6 +205,28 @@ void PadDetector::computeMasks(const cv::Mat& image, ColorOrder order) const {
     cv::morphologyEx(pad_mask_, pad_mask_, cv::MORPH_OPEN, kernel_);
     cv::morphologyEx(strip_mask_, strip_mask_, cv::MORPH_OPEN, kernel_);
   }
+  // The white centre marker lies inside the pad too: filled in, it leaves neither a hole nor, when the
+  // image border cuts it, a notch whose straight sides would pass for pad edges.
+  cv::threshold(saturation, marker_mask_, p.marker_saturation_max, 255, cv::THRESH_BINARY_INV);
+  cv::threshold(value, bright_, p.marker_value_min - 1, 255, cv::THRESH_BINARY);
+  cv::bitwise_and(marker_mask_, bright_, marker_mask_);
+  if (p.morphology_kernel_px > 1) cv::morphologyEx(marker_mask_, marker_mask_, cv::MORPH_OPEN, kernel_);
+  cv::findContours(marker_mask_, white_blobs_, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+  white_blob_red_share_.assign(white_blobs_.size(), 0.0);
+  for (size_t i = 0; i < white_blobs_.size(); ++i) {
+    white_blob_red_share_[i] = redShareAround(white_blobs_[i], image.size());
+    if (white_blob_red_share_[i] >= p.marker_min_surround)
+      cv::drawContours(pad_mask_, white_blobs_, int(i), cv::Scalar(255), cv::FILLED);
+  }
+}
+
+double PadDetector::redShareAround(const std::vector<cv::Point>& blob, const cv::Size& size) const {
+  const double area = cv::contourArea(blob);
+  const cv::Rect inner = cv::boundingRect(blob);
+  const int margin = std::max(2, int(std::round(0.3 * std::sqrt(std::max(area, 1.0)))));
+  const cv::Rect band = (inner + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & cv::Rect(cv::Point(), size);
+  const double band_area = band.area() - std::min(area, 0.9 * band.area());
+  return band_area > 0 ? std::min(1.0, cv::countNonZero(red_colour_(band)) / band_area) : 0.0;
 }
 
 Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const PlaneView* view) const {
@@ -257,7 +279,15 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
   if (view && (!result.found || result.partial)) {
     // Close range: the marker is smaller and wholly in view, so it beats a pad completed from edges.
     Detection marker;
-    if (findMarker(outlines, size, *view, marker)) result = marker;
+    if (findMarker(outlines, size, *view, marker)) {
+      if (result.found && result.strip_found) {  // the partial fit's heading still holds
+        marker.strip_found = true;
+        marker.strip_centre_px = result.strip_centre_px;
+      }
+      result = marker;
+    }
+    else if (!result.found && marker.reason != "no centre marker in view")
+      result.reason += "; " + marker.reason;
   }
   if (!result.found) return result;
 
@@ -644,15 +674,9 @@ bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines
                              const PlaneView& view, Detection& d) const {
   const auto& p = params_;
   d.reason = "no centre marker in view";
-  cv::threshold(planes_[1], marker_mask_, p.marker_saturation_max, 255, cv::THRESH_BINARY_INV);
-  cv::threshold(planes_[2], bright_, p.marker_value_min - 1, 255, cv::THRESH_BINARY);
-  cv::bitwise_and(marker_mask_, bright_, marker_mask_);
-  if (p.morphology_kernel_px > 1) cv::morphologyEx(marker_mask_, marker_mask_, cv::MORPH_OPEN, kernel_);
-  std::vector<std::vector<cv::Point>> blobs;
-  cv::findContours(marker_mask_, blobs, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-
   double best_size_error = p.size_tolerance;
-  for (const auto& blob : blobs) {
+  for (size_t i = 0; i < white_blobs_.size(); ++i) {
+    const auto& blob = white_blobs_[i];
     const double area = cv::contourArea(blob);
     if (area < p.min_strip_area_px) continue;
     if (std::any_of(blob.begin(), blob.end(), [&](const cv::Point& q) { return onBorder(q, size, p.border_margin_px); })) {
@@ -678,11 +702,7 @@ bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines
       continue;
     }
     // It must lie on the pad: red all around it.
-    const cv::Rect inner = cv::boundingRect(blob);
-    const int margin = std::max(2, int(std::round(0.3 * std::sqrt(area))));
-    const cv::Rect band = (inner + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & cv::Rect(cv::Point(), size);
-    const double band_area = band.area() - area;
-    const double red_share = band_area > 0 ? cv::countNonZero(pad_mask_(band)) / band_area : 0.0;
+    const double red_share = white_blob_red_share_[i];
     if (red_share < p.marker_min_surround) {
       d.reason = format("white blob with only %.0f%% red around it is not the centre marker", 100 * red_share);
       continue;

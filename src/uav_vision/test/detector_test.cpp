@@ -112,7 +112,7 @@ TEST(PadDetector, PadCutByTheBorderIsCompletedFromItsEdgesAndStrip) {
     const Scene s = makeScene(c.height, {c.x, c.y}, c.yaw);
     const Detection d = detector.detect(s.image, ColorOrder::kBgr, &s.view);
     ASSERT_TRUE(d.found) << c.what << ": " << d.reason;
-    EXPECT_TRUE(d.partial) << c.what;
+    EXPECT_TRUE(d.partial || d.marker) << c.what;  // the centre marker, when wholly in view, is preferred
     EXPECT_LT(planeError(s, d), 0.02) << c.what;
   }
 }
@@ -163,6 +163,43 @@ TEST(PadDetector, RedThingsOfTheWrongShapeOrSizeAreNotThePad) {
   const Detection d = PadDetector().detect(s.image, ColorOrder::kBgr, &s.view);
   ASSERT_TRUE(d.found) << d.reason;
   EXPECT_LT(planeError(s, d), 0.02);
+}
+
+TEST(PadDetector, CloseRangeTheCentreMarkerGivesTheCentre) {
+  const PadDetector detector;
+  for (double height : {0.3, 0.4, 0.5, 0.6})
+    for (double yaw : {0.0, 25.0, 60.0}) {
+      const Eigen::Vector2d offset(0.04, -0.03);
+      const Scene s = makeScene(height, offset, yaw * kDeg, attitudeFromRpy(3 * kDeg, -4 * kDeg, 0.7));
+      const Detection d = detector.detect(s.image, ColorOrder::kBgr, &s.view);
+      ASSERT_TRUE(d.found) << "h=" << height << " yaw=" << yaw << ": " << d.reason;
+      EXPECT_TRUE(d.marker);
+      EXPECT_LT(planeError(s, d), 0.005) << "h=" << height << " yaw=" << yaw;
+      EXPECT_GT(d.optical_axis_margin_px, 0.0);  // the sonar looks at the pad
+    }
+}
+
+TEST(PadDetector, CloseRangeTheCentreIsNotGuessedFromACutMarker) {
+  // Camera 0.4 m up (0.25 m half-width of view), 0.23 m off: the marker is cut by the image border and
+  // the pad's far edge, 0.27 m away on the other side, is not in view either.
+  const Scene s = makeScene(0.4, {0.0, 0.23}, 0.0);
+  const Detection d = PadDetector().detect(s.image, ColorOrder::kBgr, &s.view);
+  EXPECT_FALSE(d.found);
+  EXPECT_NE(d.reason.find("marker"), std::string::npos) << d.reason;
+}
+
+TEST(PadDetector, AWhiteSquareThatIsNotOnThePadOrOfTheWrongSizeIsNotTheMarker) {
+  const PlaneView view(simIntrinsics(), kMount, Eigen::Quaterniond::Identity(), 0.4);
+  cv::Mat ground = groundImage(simIntrinsics());
+  drawPlanePolygon(ground, view, rectangleOnPlane({0.0, 0.0}, 0.14, 0.14, 0.2), kMarkerWhite);
+  const PadDetector detector;
+  Detection d = detector.detect(ground, ColorOrder::kBgr, &view);
+  EXPECT_FALSE(d.found) << "a white square on the ground";
+  cv::Mat red(ground.size(), CV_8UC3, kRed);
+  drawPlanePolygon(red, view, rectangleOnPlane({0.0, 0.0}, 0.07, 0.07, 0.2), kMarkerWhite);
+  d = detector.detect(red, ColorOrder::kBgr, &view);
+  EXPECT_FALSE(d.found) << "half the marker's size";
+  EXPECT_NE(d.reason.find("is not the 0.14 m centre marker"), std::string::npos) << d.reason;
 }
 
 TEST(PadDetector, OnlyWrongRedThingsGiveNoDetectionAndSayWhy) {

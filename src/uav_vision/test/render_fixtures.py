@@ -38,7 +38,11 @@ BANDS = [
     ("high", 4, (4.0, 4.0), (0.0, 0.8), 15.0, "summit_xl"),
     ("mid", 2, (1.2, 3.0), (0.0, 0.6), 12.0, "car"),
     ("high", 2, (4.0, 4.0), (0.0, 0.6), 12.0, "car"),
+    # The last half metre: the red fills the view and the centre marker is the only feature.
+    ("close", 8, (0.3, 0.6), (0.0, 0.12), 10.0, "summit_xl"),
+    ("close", 2, (0.3, 0.6), (0.0, 0.10), 8.0, "car"),
 ]
+MARKER_HALF = 0.07          # half side of the white centre marker [m]
 
 
 def rotation_quat(roll, pitch, yaw):
@@ -81,6 +85,7 @@ def main():
         sim = sims[vehicle]
         m, d = sim.model, sim.data
         strip_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "landing_pad_heading")
+        marker_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "landing_pad_marker")
         made = 0
         while made < count:
             vehicle_yaw = rng.uniform(-math.pi, math.pi)
@@ -112,6 +117,10 @@ def main():
             strip_corners = [strip_top + strip_axes @ np.array([sx * 0.06, sy * 0.35, 0]) for sx, sy in
                              ((1, 1), (-1, 1), (-1, -1), (1, -1))]
             corners_px = project(corners, camera, cam_rot_world, intrinsics)
+            marker_top = d.geom_xpos[marker_geom] + pad_axes @ np.array([0, 0, 0.0015])
+            marker_corners = [marker_top + pad_axes @ np.array([sx * MARKER_HALF, sy * MARKER_HALF, 0]) for sx, sy in
+                              ((1, 1), (-1, 1), (-1, -1), (1, -1))]
+            marker_px = project(marker_corners, camera, cam_rot_world, intrinsics)
             strip_px = project(strip_corners, camera, cam_rot_world, intrinsics)
             # Visible share of the pad, from a grid of points on it.
             grid = np.array([pad + pad_axes @ np.array([u, v, 0]) for u in np.linspace(-0.5, 0.5, 21)
@@ -147,6 +156,7 @@ def main():
                 "visible_pad_share": visible_share,
                 "visible_pad_corners": int(np.sum(inside(corners_px, width, height_px))),
                 "strip_corners_in_view": int(np.sum(inside(strip_px, width, height_px))),
+                "marker_corners_in_view": int(np.sum(inside(marker_px, width, height_px))),
             })
             index += 1
             made += 1

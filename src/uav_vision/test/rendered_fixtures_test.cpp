@@ -24,9 +24,10 @@ double horizontalError(const Eigen::Vector3d& estimate, const Eigen::Vector3d& t
 }
 
 // The pad's centre is determined by what is in view when a corner is, or the whole strip is
-// (with one pad edge for its side), or two crossing edges are: the generator records corners and strip.
+// (with one pad edge for its side), or two crossing edges are, or the whole centre marker is: the
+// generator records corners, strip and marker.
 bool centreObservable(const RenderedFixture& f) {
-  return f.visible_pad_corners >= 1 || f.strip_corners_in_view == 4;
+  return f.visible_pad_corners >= 1 || f.strip_corners_in_view == 4 || f.marker_corners_in_view == 4;
 }
 
 struct BandStats {
@@ -42,7 +43,8 @@ struct BandStats {
 };
 
 std::string bandOf(const RenderedFixture& f) {
-  if (f.camera_height < 1.0) return "a: camera < 1 m";
+  if (f.camera_height < 0.7) return "0: camera < 0.7 m";
+  if (f.camera_height < 1.0) return "a: 0.7-1 m";
   if (f.camera_height < 3.0) return "b: 1-3 m";
   if (f.camera_height < 3.95) return "c: 3-3.95 m";
   return "d: 4 m";
@@ -57,13 +59,15 @@ std::vector<RenderedFixture> RenderedFixtures::fixtures_;
 
 TEST_F(RenderedFixtures, TheSetCoversTheAltitudesTiltsAndPartialViews) {
   ASSERT_GE(fixtures_.size(), 30u);
-  int low = 0, high = 0, partial = 0, tilted = 0;
+  int close = 0, low = 0, high = 0, partial = 0, tilted = 0;
   for (const auto& f : fixtures_) {
+    close += f.camera_height < 0.7 && f.marker_corners_in_view == 4;
     low += f.camera_height < 1.0;
     high += f.camera_height >= 3.95;
     partial += f.visible_pad_corners < 4;
     tilted += f.tilt_deg > 10.0;
   }
+  EXPECT_GE(close, 6);
   EXPECT_GE(low, 10);
   EXPECT_GE(high, 4);
   EXPECT_GE(partial, 10);

@@ -64,6 +64,7 @@ std::vector<RenderedFixture> loadRenderedFixtures() {
     f.visible_pad_share = num("visible_pad_share");
     f.visible_pad_corners = int(num("visible_pad_corners"));
     f.strip_corners_in_view = int(num("strip_corners_in_view"));
+    f.marker_corners_in_view = int(num("marker_corners_in_view"));
     fixtures.push_back(f);
   }
   return fixtures;
@@ -117,6 +118,7 @@ void drawPad(cv::Mat& image, const PlaneView& view, const Eigen::Vector2d& offse
   drawPlanePolygon(image, view, rectangle(offset, side, side), red_bgr);
   if (with_strip) drawPlanePolygon(image, view, rectangle(offset + 0.36 * side * forward, 0.12 * side, 0.7 * side),
                                    cv::Scalar(38, 191, 26));
+  drawPlanePolygon(image, view, rectangle(offset, 0.14 * side, 0.14 * side), kMarkerWhite);
 }
 
 cv::Mat groundImage(const CameraIntrinsics& intrinsics) {

@@ -20,7 +20,7 @@ struct RenderedFixture {
   Eigen::Vector3d pad_in_body, pad_world_aligned, strip_in_body;  // from base_link [m]
   Eigen::Quaterniond attitude, imu_attitude;                     // true, and as the IMU reported it
   double tilt_deg = 0, sonar_range = 0, baro_altitude = 0, visible_pad_share = 0;
-  int visible_pad_corners = 0, strip_corners_in_view = 0;
+  int visible_pad_corners = 0, strip_corners_in_view = 0, marker_corners_in_view = 0;
 };
 
 std::string testDataDir();
@@ -34,6 +34,9 @@ Eigen::Quaterniond attitudeFromRpy(double roll, double pitch, double yaw);
 
 // Draws a pad (red square with its green strip) lying on the plane seen by `view`: centre at `offset`
 // from the camera (world-aligned), forward axis at `yaw` in the world; colours in BGR.
+// The white centre marker as the simulator renders it (grey-white under its light), BGR.
+const cv::Scalar kMarkerWhite(180, 180, 180);
+// The pad as the simulator's: red square, green heading strip (optional), white centre marker.
 void drawPad(cv::Mat& image, const PlaneView& view, const Eigen::Vector2d& offset, double yaw,
              double side = 1.0, bool with_strip = true, const cv::Scalar& red_bgr = cv::Scalar(38, 38, 217));
 // A filled polygon given on the plane.

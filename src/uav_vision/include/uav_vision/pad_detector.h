@@ -47,7 +47,7 @@ struct PadDetectorParams {
   int green_saturation_min = 100;
   int green_value_min = 60;
   int marker_saturation_max = 60;  // the white marker: grey-white, unsaturated...
-  int marker_value_min = 110;      // ...and bright (it renders at about 180 under the scene's light)
+  int marker_value_min = 140;      // ...and bright (it renders at about 180 under the scene's light)
   int morphology_kernel_px = 3;          // opening removes specks smaller than this [px]; 1 = off
   double min_area_px = 60.0;             // smaller blobs are not considered [px^2]
   double min_solidity = 0.9;             // contour area / convex hull area
@@ -101,19 +101,23 @@ class PadDetector {
  private:
   struct Candidate;
   void computeMasks(const cv::Mat& image, ColorOrder order) const;
+  // Share of red pixels in a band around a blob (clipped by the image border) [0..1].
+  double redShareAround(const std::vector<cv::Point>& blob, const cv::Size& size) const;
   Candidate evaluate(const std::vector<cv::Point>& outline, const cv::Size& size, const PlaneView* view) const;
   bool evaluateWhole(const std::vector<cv::Point>& outline, const PlaneView* view, Candidate& candidate) const;
   bool evaluatePartial(const std::vector<cv::Point>& outline, const cv::Size& size, const PlaneView& view,
                        Candidate& candidate) const;
   const std::vector<cv::Point>* findStrip(const std::vector<cv::Point>& outline) const;
-  // The centre marker inside one of the red `outlines`; false (with d.reason) when none qualifies.
+  // The centre marker (a white blob of computeMasks) inside one of the red `outlines`; false (with
+  // d.reason) when none qualifies.
   bool findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size, const PlaneView& view,
                   Detection& d) const;
 
   PadDetectorParams params_;
   cv::Mat kernel_;
   mutable cv::Mat hsv_, planes_[3], not_red_hue_, red_colour_, bright_, pad_mask_, strip_mask_, marker_mask_;
-  mutable std::vector<std::vector<cv::Point>> strip_outlines_;
+  mutable std::vector<std::vector<cv::Point>> strip_outlines_, white_blobs_;
+  mutable std::vector<double> white_blob_red_share_;  // per white blob, redShareAround
 };
 
 }  // namespace uav_vision
