@@ -46,9 +46,16 @@ std::string FilterParameters::validate() const
     { "velocity_covariance", velocity_covariance, true, "m^2/s^3" },
     { "height_covariance", height_covariance, true, "m^2/s" },
     { "manoeuvre_covariance_scale", manoeuvre_covariance_scale, false, "-" },
+    { "manoeuvre_acceleration_covariance", manoeuvre_acceleration_covariance, false, "m^2/s^3" },
     { "steady_mode_duration", steady_mode_duration, false, "s" },
     { "manoeuvre_mode_duration", manoeuvre_mode_duration, false, "s" },
+    { "onset_window", onset_window, true, "s" },
+    { "onset_acceleration_std", onset_acceleration_std, false, "m/s^2" },
+    { "onset_threshold", onset_threshold, true, "-" },
+    { "stop_threshold", stop_threshold, true, "-" },
     { "observation_covariance", observation_covariance, false, "m^2" },
+    { "observation_std_floor", observation_std_floor, false, "m" },
+    { "observation_std_per_metre", observation_std_per_metre, true, "m/m" },
     { "gps_observation_covariance", gps_observation_covariance, false, "m^2" },
     { "gps_vision_timeout", gps_vision_timeout, true, "s" },
     { "initial_gps_height_std", initial_gps_height_std, false, "m" },
@@ -57,6 +64,8 @@ std::string FilterParameters::validate() const
     { "initial_velocity_std", initial_velocity_std, false, "m/s" },
     { "initial_acceleration_std", initial_acceleration_std, false, "m/s^2" },
     { "initial_turn_rate_std", initial_turn_rate_std, false, "rad/s" },
+    { "heading_acquisition_std", heading_acquisition_std, false, "rad" },
+    { "heading_loss_std", heading_loss_std, false, "rad" },
     { "low_speed_regularisation", low_speed_regularisation, false, "m/s" },
     { "max_integration_step", max_integration_step, false, "s" },
   };
@@ -71,6 +80,9 @@ std::string FilterParameters::validate() const
       return message.str();
     }
   }
+  if (!(heading_loss_std > heading_acquisition_std))
+    return "heading_loss_std must be > heading_acquisition_std [rad] (hysteresis), got " +
+           std::to_string(heading_loss_std) + " <= " + std::to_string(heading_acquisition_std);
   if (!std::isfinite(gps_pad_height))
     return "gps_pad_height must be a finite number [m]";
   if (max_consecutive_rejections < 1)
@@ -104,21 +116,23 @@ PadMotionFilter::PadMotionFilter(const FilterParameters& parameters)
   : params_(validated(parameters)), model_(params_.low_speed_regularisation, params_.max_integration_step)
 {
   Model::Noise steady;
-  steady.tangential_jerk = params_.model_covariance;
+  steady.jerk = params_.model_covariance;
   steady.turn_acceleration = params_.turn_rate_covariance;
-  steady.acceleration = params_.velocity_covariance;
+  steady.acceleration = steady.cross_acceleration = params_.velocity_covariance;
   steady.height_rate = params_.height_covariance;
   Model::Noise manoeuvre = steady;
-  manoeuvre.tangential_jerk *= params_.manoeuvre_covariance_scale;
+  manoeuvre.jerk *= params_.manoeuvre_covariance_scale;
   manoeuvre.turn_acceleration *= params_.manoeuvre_covariance_scale;
-  manoeuvre.acceleration *= params_.manoeuvre_covariance_scale;
-  noise_density_ = { Model::noiseDensity(steady), Model::noiseDensity(manoeuvre) };
+  // Along the heading only: across it, this much noise would wipe out the heading of a vehicle at rest.
+  manoeuvre.acceleration = params_.manoeuvre_acceleration_covariance;
+  noise_ = { steady, manoeuvre };
   reset();
 }
 
 void PadMotionFilter::reset()
 {
   initialised_ = false;
+  onsets_.clear();
   last_vision_accepted_time_ = kNever;
   last_stamp_ = { kNever, kNever };
   consecutive_rejections_ = { 0, 0 };
@@ -129,23 +143,35 @@ bool PadMotionFilter::isTracking(double now) const
   return initialised_ && now - last_accepted_time_ <= params_.max_coast_time;
 }
 
-MeasurementOutcome PadMotionFilter::addVision(double stamp, const Eigen::Vector3d& position)
+MeasurementOutcome PadMotionFilter::addVision(double stamp, const Eigen::Vector3d& position, double variance)
 {
   Eigen::Matrix<double, 3, Model::kSize> H = Eigen::Matrix<double, 3, Model::kSize>::Zero();
   H(0, Model::kPx) = H(1, Model::kPy) = H(2, Model::kPz) = 1.0;
-  return addFix<3>(Source::kVision, stamp, position, H, params_.observation_covariance);
+  const bool given = std::isfinite(variance) && variance > 0.0;
+  return addFix<3>(Source::kVision, stamp, position, H, given ? variance : params_.observation_covariance);
 }
 
-MeasurementOutcome PadMotionFilter::addGps(double stamp, const Eigen::Vector2d& position_xy)
+double FilterParameters::visionVariance(double range) const
+{
+  const double scaled = observation_std_per_metre * std::abs(range);
+  return observation_std_floor * observation_std_floor + scaled * scaled;
+}
+
+MeasurementOutcome PadMotionFilter::addGps(double stamp, const Eigen::Vector2d& position_xy,
+                                           const std::optional<Eigen::Vector2d>& velocity, double velocity_variance)
 {
   Eigen::Matrix<double, 2, Model::kSize> H = Eigen::Matrix<double, 2, Model::kSize>::Zero();
   H(0, Model::kPx) = H(1, Model::kPy) = 1.0;
-  return addFix<2>(Source::kGps, stamp, position_xy, H, params_.gps_observation_covariance);
+  std::optional<StartVelocity> start_velocity;
+  if (velocity && velocity->allFinite() && isPositiveFinite(velocity_variance))
+    start_velocity = StartVelocity{ *velocity, velocity_variance };
+  return addFix<2>(Source::kGps, stamp, position_xy, H, params_.gps_observation_covariance, start_velocity);
 }
 
 template <int M>
 MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Eigen::Matrix<double, M, 1>& z,
-                                           const Eigen::Matrix<double, M, Model::kSize>& H, double variance)
+                                           const Eigen::Matrix<double, M, Model::kSize>& H, double variance,
+                                           const std::optional<StartVelocity>& start_velocity)
 {
   using MeasurementMatrix = Eigen::Matrix<double, M, M>;
   using MeasurementVector = Eigen::Matrix<double, M, 1>;
@@ -173,9 +199,13 @@ MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Ei
       position << z(0), z(1), keep_height ? (*predicted)(Model::kPz) : params_.gps_pad_height;
       height_variance = params_.initial_gps_height_std * params_.initial_gps_height_std;
     }
-    // After a restart the old velocity is still the best guess (the platform moved, it did not stop).
-    const Eigen::Vector2d velocity =
-        predicted != nullptr ? Eigen::Vector2d(predicted->segment<2>(Model::kVx)) : Eigen::Vector2d::Zero();
+    // A reported velocity is the best start; after a restart the old velocity is still a good guess
+    // (the platform moved, it did not stop), but as uncertain as none.
+    StartVelocity velocity{ Eigen::Vector2d::Zero(), params_.initial_velocity_std * params_.initial_velocity_std };
+    if (start_velocity)
+      velocity = *start_velocity;
+    else if (predicted != nullptr)
+      velocity.velocity = Model::velocity(form_, *predicted);
     startTrack(source, stamp, position, variance, height_variance, velocity);
     return outcome;
   };
@@ -183,7 +213,7 @@ MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Ei
   if (!isTracking(stamp))
     return start_track_here(MeasurementOutcome::kInitialised, nullptr);
 
-  ModePrediction predicted = predictModes(stamp);
+  ModePrediction predicted = predictModes(stamp, false);
   const MeasurementMatrix R = MeasurementMatrix::Identity() * variance;
   std::array<MeasurementVector, kModes> innovation;
   std::array<MeasurementMatrix, kModes> S;
@@ -208,17 +238,34 @@ MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Ei
     return start_track_here(MeasurementOutcome::kReinitialised, &mean);
   }
 
+  const double speed_before = mode_probabilities_.dot(Eigen::Vector2d(x_[0](Model::kSpeed), x_[1](Model::kSpeed)));
+  std::array<Eigen::Matrix<double, Model::kSize, M>, kModes> K;
   for (int j = 0; j < kModes; ++j)
   {
     const Model::Matrix& P = predicted.P[j];
     const Eigen::LDLT<MeasurementMatrix> S_ldlt(S[j]);
     // K = P H^T S^-1 = (S^-1 H P)^T, P and S being symmetric.
-    const Eigen::Matrix<double, Model::kSize, M> K = S_ldlt.solve(H * P).transpose();
+    K[j] = S_ldlt.solve(H * P).transpose();
     // Joseph form: stays symmetric positive definite despite rounding.
-    const Model::Matrix I_KH = Model::Matrix::Identity() - K * H;
-    const Model::Matrix P_updated = I_KH * P * I_KH.transpose() + K * R * K.transpose();
-    x_[j] = predicted.x[j] + K * innovation[j];
+    const Model::Matrix I_KH = Model::Matrix::Identity() - K[j] * H;
+    const Model::Matrix P_updated = I_KH * P * I_KH.transpose() + K[j] * R * K[j].transpose();
+    x_[j] = predicted.x[j] + K[j] * innovation[j];
+    Model::normalise(form_, x_[j]);
     P_[j] = 0.5 * (P_updated + P_updated.transpose());
+  }
+  trackOnsets<M>(stamp, predicted, H, innovation, S, K);
+  if (form_ == Model::Form::kPolar)
+  {
+    // A braking vehicle's speed crossed zero: it may have stopped there rather than be reversing.
+    const Eigen::Vector2d& c = predicted.probabilities;
+    const double speed = c.dot(Eigen::Vector2d(x_[0](Model::kSpeed), x_[1](Model::kSpeed)));
+    const double acceleration = c.dot(Eigen::Vector2d(x_[0](Model::kAcceleration), x_[1](Model::kAcceleration)));
+    if (speed_before * speed < 0.0 && speed * acceleration > 0.0)
+    {
+      OnsetMatrix directions = OnsetMatrix::Zero();
+      directions(Model::kSpeed, 0) = directions(Model::kAcceleration, 1) = 1.0;
+      openOnset(stamp, directions, Eigen::Vector2d(-speed, -acceleration));
+    }
   }
   // Mode probabilities: prior c_j times likelihood, normalised in the log domain (no underflow).
   const double max_log = std::max(log_likelihood[0], log_likelihood[1]);
@@ -231,21 +278,25 @@ MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Ei
   if (source == Source::kVision)
     last_vision_accepted_time_ = stamp;
   consecutive_rejections_[s] = 0;
+  applyOnset();
+  updateForm();
   return MeasurementOutcome::kAccepted;
 }
 
 void PadMotionFilter::startTrack(Source source, double stamp, const Eigen::Vector3d& position,
-                                 double position_variance, double height_variance, const Eigen::Vector2d& velocity)
+                                 double position_variance, double height_variance, const StartVelocity& velocity)
 {
   Model::Vector x = Model::Vector::Zero();
   x.segment<3>(Model::kPx) = position;
-  x.segment<2>(Model::kVx) = velocity;
+  x.segment<2>(Model::kVx) = velocity.velocity;
   Model::Matrix P = Model::Matrix::Zero();
   P(Model::kPx, Model::kPx) = P(Model::kPy, Model::kPy) = position_variance;
   P(Model::kPz, Model::kPz) = height_variance;
-  P(Model::kVx, Model::kVx) = P(Model::kVy, Model::kVy) = params_.initial_velocity_std * params_.initial_velocity_std;
-  P(Model::kAt, Model::kAt) = params_.initial_acceleration_std * params_.initial_acceleration_std;
-  P(Model::kOmega, Model::kOmega) = params_.initial_turn_rate_std * params_.initial_turn_rate_std;
+  P(Model::kVx, Model::kVx) = P(Model::kVy, Model::kVy) = velocity.variance;
+  const double acceleration_variance = params_.initial_acceleration_std * params_.initial_acceleration_std;
+  P(Model::kAx, Model::kAx) = P(Model::kAy, Model::kAy) = acceleration_variance;
+  form_ = Model::Form::kCartesian;
+  onsets_.clear();
   x_ = { x, x };
   P_ = { P, P };
   // A new track is converging, which is what the manoeuvre mode describes best.
@@ -256,9 +307,208 @@ void PadMotionFilter::startTrack(Source source, double stamp, const Eigen::Vecto
   if (source == Source::kVision)
     last_vision_accepted_time_ = stamp;
   consecutive_rejections_ = { 0, 0 };
+  updateForm();
 }
 
-PadMotionFilter::ModePrediction PadMotionFilter::predictModes(double time) const
+void PadMotionFilter::updateForm()
+{
+  Model::Vector x;
+  Model::Matrix P;
+  combine(x_, P_, mode_probabilities_, x, P);
+  const double heading_std = Model::headingStd(form_, x, P);
+  if (form_ == Model::Form::kCartesian && heading_std <= params_.heading_acquisition_std)
+  {
+    // Each mode keeps its own velocity, on the same side of the combined direction of travel.
+    const Eigen::Vector2d v = Model::velocity(form_, x);
+    const double heading = std::atan2(v.y(), v.x());
+    for (int j = 0; j < kModes; ++j)
+    {
+      if (!(Model::velocity(form_, x_[j]).norm() > 0.0))  // degenerate mode: take the combined one
+      {
+        x_[j] = x;
+        P_[j] = P;
+      }
+      Model::toPolar(x_[j], P_[j], heading, params_.initial_turn_rate_std);
+    }
+    form_ = Model::Form::kPolar;
+    onsets_.clear();
+  }
+  else if (form_ == Model::Form::kPolar && !(heading_std <= params_.heading_loss_std))
+  {
+    for (int j = 0; j < kModes; ++j)
+      Model::toCartesian(x_[j], P_[j]);
+    form_ = Model::Form::kCartesian;
+    onsets_.clear();
+  }
+}
+
+template <int M>
+void PadMotionFilter::trackOnsets(double stamp, const ModePrediction& predicted,
+                                  const Eigen::Matrix<double, M, Model::kSize>& H,
+                                  const std::array<Eigen::Matrix<double, M, 1>, kModes>& innovation,
+                                  const std::array<Eigen::Matrix<double, M, M>, kModes>& S,
+                                  const std::array<Eigen::Matrix<double, Model::kSize, M>, kModes>& K)
+{
+  using MeasurementMatrix = Eigen::Matrix<double, M, M>;
+  using MeasurementVector = Eigen::Matrix<double, M, 1>;
+  using Signature = Eigen::Matrix<double, M, 2>;
+  // The statistic uses the moment-matched innovation of the modes (their prior weights c_j).
+  const Eigen::Vector2d& c = predicted.probabilities;
+  MeasurementVector mean_innovation = MeasurementVector::Zero();
+  for (int j = 0; j < kModes; ++j)
+    mean_innovation += c[j] * innovation[j];
+  MeasurementMatrix mean_S = MeasurementMatrix::Zero();
+  for (int j = 0; j < kModes; ++j)
+  {
+    const MeasurementVector spread = innovation[j] - mean_innovation;
+    mean_S += c[j] * (S[j] + spread * spread.transpose());
+  }
+  const Eigen::LDLT<MeasurementMatrix> S_ldlt(mean_S);
+
+  onsets_.erase(std::remove_if(onsets_.begin(), onsets_.end(),
+                               [&](const OnsetHypothesis& h) { return h.time < stamp - params_.onset_window; }),
+                onsets_.end());
+  for (OnsetHypothesis& h : onsets_)
+  {
+    // The truth moves by the model; each estimate is mixed, predicted, then corrected by its gain.
+    h.truth = predicted.transition[0] * h.truth;
+    std::array<OnsetMatrix, kModes> estimate;
+    Signature signature = Signature::Zero();
+    for (int j = 0; j < kModes; ++j)
+    {
+      estimate[j] = predicted.transition[j] *
+                    (predicted.mixing(0, j) * h.estimate[0] + predicted.mixing(1, j) * h.estimate[1]);
+      const Signature mode_signature = H * (h.truth - estimate[j]);
+      signature += c[j] * mode_signature;
+      estimate[j] += K[j] * mode_signature;
+    }
+    h.estimate = estimate;
+    const Eigen::Matrix<double, M, 2> weighted = S_ldlt.solve(signature);
+    h.information += signature.transpose() * weighted;
+    h.score += weighted.transpose() * mean_innovation;
+  }
+
+  OnsetMatrix directions = OnsetMatrix::Zero();
+  if (form_ == Model::Form::kPolar)
+  {
+    // Per m/s^2 across the velocity: a curvature step of 1 / s^2, the same acceleration turning a fast
+    // vehicle far less. Below the speed at which a step of onset_acceleration_std would change the turn
+    // rate by more than initial_turn_rate_std, the turn-rate step is what is bounded: slow vehicles do not
+    // spin up at 1 m/s^2 / s.
+    const double speed =
+        std::abs(mode_probabilities_.dot(Eigen::Vector2d(x_[0](Model::kSpeed), x_[1](Model::kSpeed))));
+    const double slow = params_.onset_acceleration_std / params_.initial_turn_rate_std;
+    directions(Model::kAcceleration, 0) = 1.0;
+    directions(Model::kCurvature, 1) =
+        1.0 / (std::max(speed, params_.low_speed_regularisation) * std::max(speed, slow));
+  }
+  else
+  {
+    directions(Model::kAx, 0) = directions(Model::kAy, 1) = 1.0;
+  }
+  openOnset(stamp, directions, std::nullopt);
+}
+
+void PadMotionFilter::openOnset(double stamp, const OnsetMatrix& directions,
+                                const std::optional<Eigen::Vector2d>& known_step)
+{
+  OnsetHypothesis opened;
+  opened.time = stamp;
+  opened.truth = directions;
+  opened.estimate = { OnsetMatrix::Zero(), OnsetMatrix::Zero() };
+  opened.known_step = known_step;
+  onsets_.push_back(opened);
+}
+
+void PadMotionFilter::applyOnset()
+{
+  // A stop: the step is known, so the log-likelihood ratio against no step is d^T step - 0.5 step^T J step.
+  const OnsetHypothesis* stop = nullptr;
+  double stop_ratio = params_.stop_threshold;
+  for (const OnsetHypothesis& h : onsets_)
+  {
+    if (!h.known_step)
+      continue;
+    const Eigen::Vector2d& step = *h.known_step;
+    const double ratio = h.score.dot(step) - 0.5 * step.dot(h.information * step);
+    if (ratio > stop_ratio)
+    {
+      stop_ratio = ratio;
+      stop = &h;
+    }
+  }
+  if (stop != nullptr)
+  {
+    for (int j = 0; j < kModes; ++j)
+    {
+      x_[j] += (stop->truth - stop->estimate[j]) * *stop->known_step;
+      Model::normalise(form_, x_[j]);
+    }
+    // Standing still is no manoeuvre: back to the modes' long-run odds.
+    mode_probabilities_ << params_.steady_mode_duration, params_.manoeuvre_mode_duration;
+    mode_probabilities_ /= mode_probabilities_.sum();
+    onsets_.clear();
+    return;
+  }
+
+  // An onset: a step ~ N(0, sigma^2 I) in the selected components. Marginal log-likelihood ratio against
+  // no step: 0.5 d^T A^-1 d - 0.5 log det(I + sigma^2 J), A = J + I / sigma^2; the step's posterior is
+  // N(A^-1 d, A^-1). A step along the velocity alone, across it alone, or both (which pays for its extra
+  // freedom in the determinant).
+  const double prior_variance = params_.onset_acceleration_std * params_.onset_acceleration_std;
+  const OnsetHypothesis* best = nullptr;
+  double best_ratio = params_.onset_threshold;
+  Eigen::Vector2d best_step;
+  Eigen::Matrix2d best_covariance;
+  for (const OnsetHypothesis& h : onsets_)
+  {
+    if (h.known_step)
+      continue;
+    for (int selection = 0; selection < 3; ++selection)
+    {
+      Eigen::Vector2d step = Eigen::Vector2d::Zero();
+      Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
+      double ratio;
+      if (selection < 2)
+      {
+        const int i = selection;
+        const double A = h.information(i, i) + 1.0 / prior_variance;
+        ratio = 0.5 * h.score(i) * h.score(i) / A - 0.5 * std::log(1.0 + prior_variance * h.information(i, i));
+        step(i) = h.score(i) / A;
+        covariance(i, i) = 1.0 / A;
+      }
+      else
+      {
+        covariance = (h.information + Eigen::Matrix2d::Identity() / prior_variance).inverse();
+        step = covariance * h.score;
+        ratio = 0.5 * h.score.dot(step) -
+                0.5 * std::log((Eigen::Matrix2d::Identity() + prior_variance * h.information).determinant());
+      }
+      if (ratio > best_ratio)
+      {
+        best_ratio = ratio;
+        best = &h;
+        best_step = step;
+        best_covariance = covariance;
+      }
+    }
+  }
+  if (best == nullptr)
+    return;
+  // Each mode's error is (truth - estimate) * step.
+  for (int j = 0; j < kModes; ++j)
+  {
+    const OnsetMatrix error = best->truth - best->estimate[j];
+    x_[j] += error * best_step;
+    Model::normalise(form_, x_[j]);
+    P_[j] += error * best_covariance * error.transpose();
+    P_[j] = 0.5 * (P_[j] + P_[j].transpose());
+  }
+  // The fixes since the onset now explain the state: the other hypotheses are void.
+  onsets_.clear();
+}
+
+PadMotionFilter::ModePrediction PadMotionFilter::predictModes(double time, bool for_output) const
 {
   const double dt = std::max(0.0, time - state_time_);
   // Continuous-time Markov chain of the modes: P(switch within dt) = 1 - exp(-dt / mean duration).
@@ -276,27 +526,43 @@ PadMotionFilter::ModePrediction PadMotionFilter::predictModes(double time) const
     for (int i = 0; i < kModes; ++i)
       mixing_weights[i] = transition(i, j) * mode_probabilities_[i];
     mixing_weights /= mixing_weights.sum();
+    prediction.mixing.col(j) = mixing_weights;
     combine(x_, P_, mixing_weights, prediction.x[j], prediction.P[j]);
-    model_.propagate(prediction.x[j], prediction.P[j], noise_density_[j], dt);
+    model_.propagate(form_, prediction.x[j], prediction.P[j], noise_[j], dt, for_output, &prediction.transition[j]);
   }
   return prediction;
 }
 
 void PadMotionFilter::combine(const std::array<Model::Vector, kModes>& x, const std::array<Model::Matrix, kModes>& P,
-                              const Eigen::Vector2d& weights, Model::Vector& x_out, Model::Matrix& P_out)
+                              const Eigen::Vector2d& weights, Model::Vector& x_out, Model::Matrix& P_out) const
 {
-  x_out = weights[0] * x[0] + weights[1] * x[1];
+  // Mean of the differences to mode 0, so that headings near +-pi average correctly.
+  x_out = x[0];
+  for (int i = 1; i < kModes; ++i)
+    x_out += weights[i] * Model::difference(form_, x[i], x[0]);
+  Model::normalise(form_, x_out);
   P_out.setZero();
   for (int i = 0; i < kModes; ++i)
   {
-    const Model::Vector spread = x[i] - x_out;
+    const Model::Vector spread = Model::difference(form_, x[i], x_out);
     P_out += weights[i] * (P[i] + spread * spread.transpose());
   }
 }
 
-PadMotionFilter::Model::Vector PadMotionFilter::combinedMean() const
+void PadMotionFilter::combinedAt(double time, Model::Vector& x, Model::Matrix& P, double& manoeuvre_probability) const
 {
-  return mode_probabilities_[0] * x_[0] + mode_probabilities_[1] * x_[1];
+  if (time >= state_time_)
+  {
+    const ModePrediction predicted = predictModes(time, true);
+    combine(predicted.x, predicted.P, predicted.probabilities, x, P);
+    manoeuvre_probability = predicted.probabilities[1];
+  }
+  else
+  {
+    combine(x_, P_, mode_probabilities_, x, P);
+    model_.propagateMean(form_, x, time - state_time_);
+    manoeuvre_probability = mode_probabilities_[1];
+  }
 }
 
 std::optional<PadState> PadMotionFilter::stateAt(double time) const
@@ -305,30 +571,17 @@ std::optional<PadState> PadMotionFilter::stateAt(double time) const
     return std::nullopt;
   Model::Vector x;
   Model::Matrix P;
-  double manoeuvre_probability;
-  if (time >= state_time_)
-  {
-    const ModePrediction predicted = predictModes(time);
-    combine(predicted.x, predicted.P, predicted.probabilities, x, P);
-    manoeuvre_probability = predicted.probabilities[1];
-  }
-  else
-  {
-    combine(x_, P_, mode_probabilities_, x, P);
-    model_.propagateMean(x, time - state_time_);
-    manoeuvre_probability = mode_probabilities_[1];
-  }
-
   PadState state;
+  combinedAt(time, x, P, state.manoeuvre_probability);
   state.time = time;
   state.position = x.segment<3>(Model::kPx);
-  state.velocity << x(Model::kVx), x(Model::kVy), 0.0;
+  state.velocity << Model::velocity(form_, x), 0.0;
   state.position_covariance = P.block<3, 3>(Model::kPx, Model::kPx);
-  state.velocity_covariance = P.block<2, 2>(Model::kVx, Model::kVx);
-  state.tangential_acceleration = x(Model::kAt);
-  state.turn_rate = x(Model::kOmega);
-  state.turn_rate_variance = P(Model::kOmega, Model::kOmega);
-  state.manoeuvre_probability = manoeuvre_probability;
+  state.velocity_covariance = Model::velocityCovariance(form_, x, P);
+  state.tangential_acceleration = model_.tangentialAcceleration(form_, x);
+  state.turn_rate = model_.turnRate(form_, x);
+  state.turn_rate_variance = model_.turnRateVariance(form_, x, P);
+  state.heading_known = form_ == Model::Form::kPolar;
   return state;
 }
 
@@ -341,16 +594,19 @@ std::vector<PathPoint> PadMotionFilter::predictPath(double t0, double time_step,
     return path;
   const int last = static_cast<int>(std::lround(path_time / time_step));
   path.reserve(last + 1);
-  Model::Vector x = combinedMean();
-  model_.propagateMean(x, t0 - state_time_);
+  // Starts from the state that stateAt(t0) reports.
+  Model::Vector x;
+  Model::Matrix P;
+  double manoeuvre_probability;
+  combinedAt(t0, x, P, manoeuvre_probability);
   for (int k = 0; k <= last; ++k)
   {
     if (k > 0)
-      model_.propagateMean(x, time_step);
+      model_.propagateMean(form_, x, time_step, true);
     PathPoint point;
     point.time = t0 + k * time_step;
     point.position = x.segment<3>(Model::kPx);
-    point.velocity << x(Model::kVx), x(Model::kVy), 0.0;
+    point.velocity << Model::velocity(form_, x), 0.0;
     path.push_back(point);
   }
   return path;

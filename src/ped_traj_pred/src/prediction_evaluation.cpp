@@ -39,6 +39,7 @@ EvaluationResult evaluatePrediction(const SyntheticTrajectory& trajectory, const
   std::normal_distribution<double> unit_normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
 
+  const double told_std = measurements.told_std < 0.0 ? measurements.noise_std : measurements.told_std;
   const double rate = trajectory.sampleRate();
   const int horizon_samples = static_cast<int>(std::lround(evaluation.horizon * rate));
   const int gps_period_samples = std::max(1, static_cast<int>(std::lround(rate / measurements.gps_rate_hz)));
@@ -46,6 +47,16 @@ EvaluationResult evaluatePrediction(const SyntheticTrajectory& trajectory, const
     return std::any_of(measurements.blackouts.begin(), measurements.blackouts.end(),
                        [t](const MeasurementSpec::Blackout& b) { return t >= b.start && t < b.start + b.duration; });
   };
+
+  // Sample index at which each manoeuvre's velocity is scored (the first sample at or after it + delay).
+  std::vector<int> manoeuvre_samples;
+  for (const double manoeuvre : trajectory.manoeuvreTimes())
+  {
+    const int k = static_cast<int>(std::ceil((manoeuvre + evaluation.velocity_delay) * rate - 1e-6));
+    if (k < trajectory.size() && trajectory.sampleTime(k) >= evaluation.warmup)
+      manoeuvre_samples.push_back(k);
+  }
+  auto next_manoeuvre = manoeuvre_samples.begin();
 
   EvaluationResult result;
   const auto count = [&](MeasurementOutcome outcome) {
@@ -73,12 +84,25 @@ EvaluationResult evaluatePrediction(const SyntheticTrajectory& trajectory, const
       Eigen::Vector3d detection = truth + measurements.noise_std * noise;
       if (outlier)
         detection += measurements.outlier_distance * Eigen::Vector3d(std::cos(outlier_angle), std::sin(outlier_angle), 0.0);
-      count(filter.addVision(t, detection));
+      count(filter.addVision(t, detection, told_std * told_std));
+    }
+
+    const bool tracking = filter.isTracking(t);
+    double velocity_error = 0.0;
+    if (tracking)
+      velocity_error = (filter.stateAt(t)->velocity.head<2>() - trajectory.velocity(k)).norm();
+    for (; next_manoeuvre != manoeuvre_samples.end() && *next_manoeuvre == k; ++next_manoeuvre)
+    {
+      if (tracking)
+      {
+        result.manoeuvre_times.push_back(t - evaluation.velocity_delay);
+        result.manoeuvre_velocity_errors.push_back(velocity_error);
+      }
     }
 
     if (t < evaluation.warmup || k + horizon_samples >= trajectory.size())
       continue;
-    if (!filter.isTracking(t))
+    if (!tracking)
     {
       ++result.untracked_ticks;
       continue;
@@ -86,8 +110,11 @@ EvaluationResult evaluatePrediction(const SyntheticTrajectory& trajectory, const
     const std::vector<PathPoint> path = filter.predictPath(t, evaluation.time_step, evaluation.horizon);
     result.times.push_back(t);
     result.errors.push_back((path.back().position - trajectory.position(k + horizon_samples)).norm());
+    result.velocity_errors.push_back(velocity_error);
   }
   result.statistics = summarise(result.errors);
+  result.velocity_statistics = summarise(result.velocity_errors);
+  result.manoeuvre_velocity_statistics = summarise(result.manoeuvre_velocity_errors);
   return result;
 }
 

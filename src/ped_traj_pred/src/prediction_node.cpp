@@ -2,6 +2,7 @@
 
 #include <nav_msgs/Path.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace ped_traj_pred
@@ -38,9 +39,16 @@ FilterParameters loadFilterParameters(const ros::NodeHandle& nh)
   p.velocity_covariance = requireParam<double>(nh, "velocity_covariance");
   p.height_covariance = requireParam<double>(nh, "height_covariance");
   p.manoeuvre_covariance_scale = requireParam<double>(nh, "manoeuvre_covariance_scale");
+  p.manoeuvre_acceleration_covariance = requireParam<double>(nh, "manoeuvre_acceleration_covariance");
   p.steady_mode_duration = requireParam<double>(nh, "steady_mode_duration");
   p.manoeuvre_mode_duration = requireParam<double>(nh, "manoeuvre_mode_duration");
+  p.onset_window = requireParam<double>(nh, "onset_window");
+  p.onset_acceleration_std = requireParam<double>(nh, "onset_acceleration_std");
+  p.onset_threshold = requireParam<double>(nh, "onset_threshold");
+  p.stop_threshold = requireParam<double>(nh, "stop_threshold");
   p.observation_covariance = requireParam<double>(nh, "observation_covariance");
+  p.observation_std_floor = requireParam<double>(nh, "observation_std_floor");
+  p.observation_std_per_metre = requireParam<double>(nh, "observation_std_per_metre");
   p.gps_observation_covariance = requireParam<double>(nh, "gps_observation_covariance");
   p.gps_vision_timeout = requireParam<double>(nh, "gps_vision_timeout");
   p.gps_pad_height = requireParam<double>(nh, "gps_pad_height");
@@ -51,6 +59,8 @@ FilterParameters loadFilterParameters(const ros::NodeHandle& nh)
   p.initial_velocity_std = requireParam<double>(nh, "initial_velocity_std");
   p.initial_acceleration_std = requireParam<double>(nh, "initial_acceleration_std");
   p.initial_turn_rate_std = requireParam<double>(nh, "initial_turn_rate_std");
+  p.heading_acquisition_std = requireParam<double>(nh, "heading_acquisition_std");
+  p.heading_loss_std = requireParam<double>(nh, "heading_loss_std");
   p.low_speed_regularisation = requireParam<double>(nh, "low_speed_regularisation");
   p.max_integration_step = requireParam<double>(nh, "max_integration_step");
   const std::string error = p.validate();
@@ -93,6 +103,7 @@ PredictionNode::PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
       requireParam<double>(private_nh, "gps_pad_offset_y");
   const std::string pose_topic = requireParam<std::string>(private_nh, "pose_topic");
   const std::string gps_topic = requireParam<std::string>(private_nh, "gps_topic");
+  const std::string relative_topic = requireParam<std::string>(private_nh, "relative_pose_topic");
   const std::string path_topic = requireParam<std::string>(private_nh, "future_path_topic");
   const std::string odom_topic = requireParam<std::string>(private_nh, "odom_topic");
   if (!(std::isfinite(time_step_) && time_step_ > 0.0))
@@ -110,6 +121,9 @@ PredictionNode::PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
   odom_pub_ = nh.advertise<nav_msgs::Odometry>(odom_topic, 10);
   // Low latency matters more than bandwidth: every detection is used at its own stamp.
   detection_sub_ = nh.subscribe(pose_topic, 30, &PredictionNode::onDetection, this, ros::TransportHints().tcpNoDelay());
+  if (!relative_topic.empty())
+    relative_sub_ = nh.subscribe(relative_topic, 30, &PredictionNode::onRelativeDetection, this,
+                                 ros::TransportHints().tcpNoDelay());
   if (!gps_topic.empty())
     gps_sub_ = nh.subscribe(gps_topic, 10, &PredictionNode::onGps, this, ros::TransportHints().tcpNoDelay());
   lockstep_.emplace(nh, ros::Duration(1.0 / pub_freq_));
@@ -141,7 +155,23 @@ void PredictionNode::onDetection(const geometry_msgs::PointStamped::ConstPtr& ms
     return;
   }
   const ros::Time stamp = stampOf(msg->header);
-  logOutcome(filter_.addVision(stamp.toSec(), position), detection_sub_.getTopic(), stamp);
+  logOutcome(filter_.addVision(stamp.toSec(), position, visionVariance(stamp)), detection_sub_.getTopic(), stamp);
+}
+
+void PredictionNode::onRelativeDetection(const geometry_msgs::PointStamped::ConstPtr& msg)
+{
+  const double range = std::sqrt(msg->point.x * msg->point.x + msg->point.y * msg->point.y + msg->point.z * msg->point.z);
+  if (std::isfinite(range))
+    last_range_ = std::make_pair(stampOf(msg->header), range);
+}
+
+double PredictionNode::visionVariance(const ros::Time& stamp) const
+{
+  // The relative fix of the same frame gives the range; the previous frame's is close enough.
+  constexpr double kMaxRangeAge = 0.2;  // [s]
+  if (last_range_ && std::abs((stamp - last_range_->first).toSec()) <= kMaxRangeAge)
+    return filter_.parameters().visionVariance(last_range_->second);
+  return filter_.parameters().observation_covariance;
 }
 
 void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
@@ -160,8 +190,15 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
     ROS_WARN_THROTTLE(5.0, "Dropping a GPS fix with NaN or inf on %s", gps_sub_.getTopic().c_str());
     return;
   }
+  // The reported velocity (world frame) starts a track with a heading when vision is absent. The pad's
+  // offset from the receiver adds omega x offset, unknown here and at most a few cm/s.
+  std::optional<Eigen::Vector2d> velocity;
+  const Eigen::Vector2d reported(msg->twist.twist.linear.x, msg->twist.twist.linear.y);
+  const double velocity_variance = std::max(msg->twist.covariance[0], msg->twist.covariance[7]);
+  if (reported.allFinite() && velocity_variance > 0.0 && velocity_variance < kUnknownVariance)
+    velocity = reported;
   const ros::Time stamp = stampOf(msg->header);
-  logOutcome(filter_.addGps(stamp.toSec(), pad), gps_sub_.getTopic(), stamp);
+  logOutcome(filter_.addGps(stamp.toSec(), pad, velocity, velocity_variance), gps_sub_.getTopic(), stamp);
 }
 
 void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp)

@@ -33,6 +33,11 @@ Eigen::Vector2d SyntheticTrajectory::command(const TrajectorySpec& spec, double 
       return { std::fmod(t, 8.0) < 5.0 ? v : 0.0, 0.0 };
     case PathKind::kAcceleration:
       return { std::fmod(t, 16.0) < 8.0 ? 1.0 : v, 0.0 };
+    case PathKind::kBackAndForth:
+    {
+      const double leg_time = 2.0 * spec.radius / v;
+      return { std::fmod(t, 2.0 * leg_time) < leg_time ? v : -v, 0.0 };
+    }
   }
   return { 0.0, 0.0 };
 }
@@ -54,6 +59,10 @@ SyntheticTrajectory::SyntheticTrajectory(const TrajectorySpec& spec, double samp
   double yaw = 0.0;
   Eigen::Vector2d xy(0.0, 0.0);
   double t = 0.0;
+  // Sign (-1, 0, 1) of the speed's and the yaw rate's change in the previous sub-step: a manoeuvre starts
+  // or ends where one of them changes, or where the speed changes sign.
+  const auto sign = [](double value) { return (value > 0.0) - (value < 0.0); };
+  int speed_ramp = 0, yaw_ramp = 0, direction = sign(speed);  // direction: of travel, last while moving
   positions_.reserve(samples);
   velocities_.reserve(samples);
   for (int k = 0; k < samples; ++k)
@@ -64,8 +73,17 @@ SyntheticTrajectory::SyntheticTrajectory(const TrajectorySpec& spec, double samp
     for (int i = 0; i < substeps; ++i)
     {
       const Eigen::Vector2d target = command(spec, t);
+      const double previous_speed = speed, previous_yaw_rate = yaw_rate;
       speed = moveTowards(speed, target.x(), spec.max_acceleration * h);
       yaw_rate = moveTowards(yaw_rate, target.y(), spec.max_yaw_acceleration * h);
+      const int new_speed_ramp = sign(speed - previous_speed), new_yaw_ramp = sign(yaw_rate - previous_yaw_rate);
+      const bool reversed = sign(speed) != 0 && direction != 0 && sign(speed) != direction;
+      if (new_speed_ramp != speed_ramp || new_yaw_ramp != yaw_ramp || reversed)
+        manoeuvre_times_.push_back(t);
+      speed_ramp = new_speed_ramp;
+      yaw_ramp = new_yaw_ramp;
+      if (sign(speed) != 0)
+        direction = sign(speed);
       // Midpoint rule for the heading: exact for constant yaw rate up to O(h^2).
       const double mid_yaw = yaw + 0.5 * yaw_rate * h;
       xy += speed * h * Eigen::Vector2d(std::cos(mid_yaw), std::sin(mid_yaw));

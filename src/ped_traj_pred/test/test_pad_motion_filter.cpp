@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -43,6 +44,60 @@ void print(const char* name, const EvaluationResult& result)
   const ErrorStatistics& s = result.statistics;
   std::printf("[ stats    ] %-28s 1 s-ahead error: median %.3f  p95 %.3f  max %.3f m  (%d scored, %d rejected)\n",
               name, s.median, s.p95, s.max, s.count, result.rejected);
+}
+
+enum class Manoeuvre
+{
+  kPullAway,  ///< from rest
+  kBraking,   ///< the speed starts to fall
+  kStop,      ///< the speed reaches zero and stays there
+  kReversal,  ///< the speed passes through zero
+  kOther,     ///< the end of a speed-up, a turn
+};
+
+/// What the vehicle of `trajectory` does at manoeuvre time `t` [s], from the truth around it.
+Manoeuvre classify(const SyntheticTrajectory& trajectory, double t)
+{
+  const auto velocity = [&](double time) {
+    const int k = static_cast<int>(std::lround(time * trajectory.sampleRate()));
+    return trajectory.velocity(std::clamp(k, 0, trajectory.size() - 1));
+  };
+  const Eigen::Vector2d before = velocity(t - 0.1), after = velocity(t + 0.3);
+  if (before.norm() < 0.01 && after.norm() > 0.01)
+    return Manoeuvre::kPullAway;
+  if (before.norm() > 0.01 && after.norm() < 0.01)
+    return Manoeuvre::kStop;
+  if (before.dot(after) < 0.0)
+    return Manoeuvre::kReversal;
+  return after.norm() < before.norm() ? Manoeuvre::kBraking : Manoeuvre::kOther;
+}
+
+/// Velocity errors [m/s] 0.3 s after each manoeuvre of kind `kind` on `spec`, 1 cm detection noise (the
+/// filter told so), over seeds 1..`seeds`.
+std::vector<double> velocityErrorsAfter(Manoeuvre kind, const TrajectorySpec& spec, unsigned seeds = 3)
+{
+  const SyntheticTrajectory trajectory(spec, kCameraRate);
+  std::vector<double> errors;
+  for (unsigned seed = 1; seed <= seeds; ++seed)
+  {
+    MeasurementSpec measurements;
+    measurements.noise_std = 0.01;
+    measurements.seed = seed;
+    const EvaluationResult result = evaluatePrediction(trajectory, measurements, FilterParameters{});
+    for (size_t i = 0; i < result.manoeuvre_times.size(); ++i)
+    {
+      if (classify(trajectory, result.manoeuvre_times[i]) == kind)
+        errors.push_back(result.manoeuvre_velocity_errors[i]);
+    }
+  }
+  return errors;
+}
+
+void printErrors(const char* name, const std::vector<double>& errors)
+{
+  const ErrorStatistics s = summarise(errors);
+  std::printf("[ stats    ] %-40s velocity error 0.3 s after: mean %.3f  median %.3f  p95 %.3f  max %.3f m/s (%d)\n",
+              name, s.mean, s.median, s.p95, s.max, s.count);
 }
 
 /// Feeds noise-free vision fixes of a pad standing still at `position` from t0 to t1 at 30 Hz.
@@ -177,6 +232,99 @@ TEST(PredictionAccuracy, ZIsEstimatedAsAConstant)
   EXPECT_EQ(state->velocity.z(), 0.0);
   for (const PathPoint& point : filter.predictPath(10.0, 0.1, 2.0))
     EXPECT_NEAR(point.position.z(), state->position.z(), 1e-9);
+}
+
+// The model keeps the heading while the speed passes through zero, so a reversal needs no manoeuvre at
+// all: the velocity follows it as exactly as a straight line.
+TEST(Manoeuvres, ReversalThroughZeroSpeedIsFollowedExactly)
+{
+  for (const double speed : { 2.0, 3.0 })
+  {
+    const std::vector<double> errors =
+        velocityErrorsAfter(Manoeuvre::kReversal, makePath(PathKind::kBackAndForth, speed, 10.0, 1.0, 3.0, 60.0));
+    printErrors(("back_and_forth " + std::to_string(int(speed)) + " m/s, reversal").c_str(), errors);
+    ASSERT_GE(errors.size(), 6u);
+    EXPECT_LT(summarise(errors).median, 0.05) << speed << " m/s";
+    EXPECT_LT(summarise(errors).max, 0.15) << speed << " m/s";
+  }
+}
+
+// 1 m/s^2 ramps with 1 cm noise. A ramp's onset is a step in the acceleration that has moved the pad by
+// only 2 cm after 0.2 s, 4.5 cm after 0.3 s: the IMM and the onset test take it up after 0.2-0.35 s, so
+// 0.3 s after it the error is 0-0.3 m/s (before: 0.3 m/s at a pull-away, the heading of a standing pad
+// being unknown to the model). A stop, a step of known size at a known instant, is found sooner.
+TEST(Manoeuvres, PullAwayFromRestIsFollowedWithinAFewFrames)
+{
+  const std::vector<double> errors =
+      velocityErrorsAfter(Manoeuvre::kPullAway, makePath(PathKind::kStopAndGo, 1.0, 10.0, 1.0, 3.0, 60.0));
+  printErrors("stop_and_go 1 m/s, pull-away", errors);
+  ASSERT_GE(errors.size(), 15u);
+  EXPECT_LT(summarise(errors).median, 0.16);
+  EXPECT_LT(summarise(errors).max, 0.30);
+}
+
+TEST(Manoeuvres, BrakingToAStopIsFollowedWithinAFewFrames)
+{
+  for (const double speed : { 1.0, 3.0 })
+  {
+    const TrajectorySpec spec = makePath(PathKind::kStopAndGo, speed, 10.0, 1.0, 3.0, 60.0);
+    const std::vector<double> braking = velocityErrorsAfter(Manoeuvre::kBraking, spec);
+    printErrors(("stop_and_go " + std::to_string(int(speed)) + " m/s, braking").c_str(), braking);
+    ASSERT_GE(braking.size(), 15u);
+    EXPECT_LT(summarise(braking).median, 0.18) << speed << " m/s";
+    EXPECT_LT(summarise(braking).max, 0.30) << speed << " m/s";
+  }
+  // At 3 m/s the vehicle pulls away again the moment it stops: only the 1 m/s path stops.
+  const std::vector<double> stop =
+      velocityErrorsAfter(Manoeuvre::kStop, makePath(PathKind::kStopAndGo, 1.0, 10.0, 1.0, 3.0, 60.0));
+  printErrors("stop_and_go 1 m/s, stop", stop);
+  ASSERT_GE(stop.size(), 15u);
+  EXPECT_LT(summarise(stop).median, 0.10);
+  EXPECT_LT(summarise(stop).max, 0.22);
+}
+
+TEST(Heading, ATrackStartedAtRestFindsItsHeadingWhenThePadPullsAway)
+{
+  // At rest for 3 s, then 1 m/s^2 towards 120 deg: the heading is unknown until the pad moves.
+  PadMotionFilter filter{ FilterParameters{} };
+  const Eigen::Vector2d direction(std::cos(2.0 * M_PI / 3.0), std::sin(2.0 * M_PI / 3.0));
+  std::mt19937 rng(2);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  for (int k = 0; k <= 6 * 30; ++k)
+  {
+    const double t = k / kCameraRate, moving = std::max(0.0, t - 3.0);
+    const Eigen::Vector2d xy = 0.5 * moving * moving * direction;
+    filter.addVision(t, Eigen::Vector3d(xy.x() + noise(rng), xy.y() + noise(rng), 0.5 + noise(rng)), 1e-4);
+    if (k == 87)  // t = 2.9 s
+    {
+      EXPECT_FALSE(filter.stateAt(t)->heading_known) << "the heading of a pad that never moved";
+    }
+  }
+  const PadState state = *filter.stateAt(6.0);
+  EXPECT_TRUE(state.heading_known);
+  EXPECT_LT((state.velocity.head<2>() - 3.0 * direction).norm(), 0.15);
+  EXPECT_NEAR(state.tangential_acceleration, 1.0, 0.3);
+}
+
+TEST(Heading, DrivingWestAcrossTheHeadingWrapAround)
+{
+  // Heading +-pi: the modes' headings straddle the wrap-around, and their mixture must not average to 0.
+  PadMotionFilter filter{ FilterParameters{} };
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  for (int k = 0; k <= 10 * 30; ++k)
+  {
+    const double t = k / kCameraRate;
+    filter.addVision(t, Eigen::Vector3d(-2.0 * t + noise(rng), 0.01 * std::sin(t) + noise(rng), 0.5 + noise(rng)));
+    if (t > 2.0)
+    {
+      const PadState state = *filter.stateAt(t);
+      ASSERT_LT((state.velocity.head<2>() - Eigen::Vector2d(-2.0, 0.0)).norm(), 0.2) << "at t = " << t;
+    }
+  }
+  EXPECT_TRUE(filter.stateAt(10.0)->heading_known);
+  const std::vector<PathPoint> path = filter.predictPath(10.0, 0.1, 1.0);
+  EXPECT_NEAR(path.back().position.x(), -22.0, 0.1);
 }
 
 TEST(Gaps, RandomDropsAndBlackoutsAreCoastedThrough)
@@ -319,6 +467,21 @@ TEST(Gps, StartsATrackAtTheConfiguredHeightAndIsIgnoredWhileVisionIsFresh)
             MeasurementOutcome::kAccepted);
 }
 
+TEST(Gps, ATrackStartedFromGpsWithTheReportedVelocityKnowsItsHeading)
+{
+  PadMotionFilter filter{ FilterParameters{} };
+  EXPECT_EQ(filter.addGps(0.0, Eigen::Vector2d(10.0, 5.0), Eigen::Vector2d(2.0, 1.0), 0.01),
+            MeasurementOutcome::kInitialised);
+  const PadState state = *filter.stateAt(0.0);
+  EXPECT_TRUE(state.heading_known);
+  EXPECT_LT((state.velocity.head<2>() - Eigen::Vector2d(2.0, 1.0)).norm(), 1e-9);
+  // Without a usable velocity the track starts with none and no heading.
+  PadMotionFilter without{ FilterParameters{} };
+  without.addGps(0.0, Eigen::Vector2d(10.0, 5.0), Eigen::Vector2d(2.0, 1.0), 0.0);
+  EXPECT_FALSE(without.stateAt(0.0)->heading_known);
+  EXPECT_EQ(without.stateAt(0.0)->velocity.norm(), 0.0);
+}
+
 TEST(Gps, KeepsTheTrackThroughAVisionBlackoutLongerThanTheCoastTime)
 {
   MeasurementSpec measurements;
@@ -398,6 +561,9 @@ TEST(Api, InvalidParametersAreNamed)
   parameters = FilterParameters{};
   parameters.model_covariance = std::numeric_limits<double>::quiet_NaN();
   EXPECT_NE(parameters.validate().find("model_covariance"), std::string::npos);
+  parameters = FilterParameters{};
+  parameters.heading_loss_std = parameters.heading_acquisition_std;
+  EXPECT_NE(parameters.validate().find("heading_loss_std"), std::string::npos);
   parameters = FilterParameters{};
   parameters.max_consecutive_rejections = 0;
   EXPECT_NE(parameters.validate().find("max_consecutive_rejections"), std::string::npos);

@@ -7,7 +7,7 @@ the flying system outside a test.
 
 Like uav_vision, it anchors the pad's world position on the drone's own estimate:
 pad = ardrone/odom_estimate + (true pad - true drone) + noise.
-Parameters (private): ~noise [m] 0.03, ~latency [s] 0.05, ~rate_hz 30, ~path_time [s] 2, ~time_step [s] 0.1.
+Parameters (private): ~noise [m] 0.03, ~latency [s] 0.03 (about one camera frame, as the detector under lock-step), ~rate_hz 30, ~path_time [s] 2, ~time_step [s] 0.1.
 """
 import collections
 
@@ -20,42 +20,54 @@ from nav_msgs.msg import Odometry, Path
 class StandIn:
     def __init__(self):
         self.noise = rospy.get_param("~noise", 0.03)
-        self.latency = rospy.get_param("~latency", 0.05)
+        self.latency = rospy.get_param("~latency", 0.03)
         self.path_time = rospy.get_param("~path_time", 2.0)
         self.time_step = rospy.get_param("~time_step", 0.1)
         self.rng = np.random.default_rng(rospy.get_param("~seed", 0))
-        self.pad_history = collections.deque(maxlen=20)   # (t, true pad position)
-        self.truth = self.estimate = None
+        # Recent poses by stamp: ground truth may arrive in bursts, so the pad and the drone are paired
+        # at the same stamp, never the latest of each.
+        self.pad_history = collections.OrderedDict()        # stamp -> true pad position
+        self.truth_history, self.estimate_history = {}, {}  # stamp -> true / estimated drone position
         self.queue = collections.deque()
+        self.last_sampled = None
         self.pub_path = rospy.Publisher("kalman_prediction_path", Path, queue_size=5)
         self.pub_odom = rospy.Publisher("kalman_platform_odom", Odometry, queue_size=5)
         self.pub_seen = rospy.Publisher("platform/current_platform_position_in_ardrone", PointStamped, queue_size=5)
-        rospy.Subscriber("groundtruth/landing_pad", PoseStamped, self.on_pad, queue_size=5)
-        rospy.Subscriber("ardrone/ground_truth/state", Odometry, self.on_truth, queue_size=5)
-        rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5)
+        rospy.Subscriber("groundtruth/landing_pad", PoseStamped, self.on_pad, queue_size=50, tcp_nodelay=True)
+        rospy.Subscriber("ardrone/ground_truth/state", Odometry, self.on_truth, queue_size=50, tcp_nodelay=True)
+        rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=50, tcp_nodelay=True)
 
     @staticmethod
     def _xyz(point):
         return np.array([point.x, point.y, point.z])
 
+    @staticmethod
+    def _remember(history, msg, position, keep=100):
+        history[round(msg.header.stamp.to_sec(), 3)] = position
+        while len(history) > keep:
+            history.pop(next(iter(history)))
+
     def on_pad(self, msg):
-        self.pad_history.append((msg.header.stamp.to_sec(), self._xyz(msg.pose.position)))
+        self._remember(self.pad_history, msg, self._xyz(msg.pose.position))
 
     def on_truth(self, msg):
-        self.truth = self._xyz(msg.pose.pose.position)
+        self._remember(self.truth_history, msg, self._xyz(msg.pose.pose.position))
 
     def on_estimate(self, msg):
-        self.estimate = self._xyz(msg.pose.pose.position)
+        self._remember(self.estimate_history, msg, self._xyz(msg.pose.pose.position))
 
     def sample(self):
         t = rospy.get_time()
-        if len(self.pad_history) >= 6 and self.truth is not None and self.estimate is not None:
-            stamp, pad = self.pad_history[-1]
-            old_stamp, old_pad = self.pad_history[-6]
-            velocity = (pad - old_pad) / max(1e-3, stamp - old_stamp)
+        pads = dict(list(self.pad_history.items()))  # a copy: the callbacks add to it meanwhile
+        stamps = [s for s in pads if s in self.truth_history and s in self.estimate_history]
+        if stamps and stamps[-1] != self.last_sampled:
+            stamp = self.last_sampled = stamps[-1]
+            pad = pads[stamp]
+            old_stamp = min(s for s in pads if s >= stamp - 0.1)
+            velocity = (pad - pads[old_stamp]) / max(1e-3, stamp - old_stamp)
             velocity[2] = 0.0
-            relative = pad - self.truth + self.rng.normal(0.0, self.noise, 3)
-            self.queue.append((t + self.latency, stamp, self.estimate + relative, velocity, relative))
+            relative = pad - self.truth_history[stamp] + self.rng.normal(0.0, self.noise, 3)
+            self.queue.append((t + self.latency, stamp, self.estimate_history[stamp] + relative, velocity, relative))
         while self.queue and self.queue[0][0] <= t:
             _, stamp, seen, velocity, relative = self.queue.popleft()
             self.publish(stamp, seen, velocity, relative)

@@ -112,13 +112,16 @@ PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle p
   indicator_in_base_pub_ =
       nh.advertise<geometry_msgs::PointStamped>("platform/current_indicator_position_in_ardrone", 10);
   debug_pub_ = image_transport_.advertise("platform_detection/debug_image", 1);
+  // Nagle's algorithm would deliver the drone's state in bursts, late for the image it locates the pad with.
+  const ros::TransportHints no_delay = ros::TransportHints().tcpNoDelay();
   camera_info_sub_ = nh.subscribe("ardrone/bottom/camera_info", 5, &PlatformDetectionRos::onCameraInfo, this);
-  imu_sub_ = nh.subscribe("ardrone/imu", 50, &PlatformDetectionRos::onImu, this);
-  sonar_sub_ = nh.subscribe("ardrone/sonar_height", 10, &PlatformDetectionRos::onSonar, this);
-  altimeter_sub_ = nh.subscribe("ardrone/altimeter", 10, &PlatformDetectionRos::onAltimeter, this);
-  odom_sub_ = nh.subscribe("ardrone/odom_estimate", 10, &PlatformDetectionRos::onOdomEstimate, this);
+  imu_sub_ = nh.subscribe("ardrone/imu", 50, &PlatformDetectionRos::onImu, this, no_delay);
+  sonar_sub_ = nh.subscribe("ardrone/sonar_height", 10, &PlatformDetectionRos::onSonar, this, no_delay);
+  altimeter_sub_ = nh.subscribe("ardrone/altimeter", 10, &PlatformDetectionRos::onAltimeter, this, no_delay);
+  odom_sub_ = nh.subscribe("ardrone/odom_estimate", 10, &PlatformDetectionRos::onOdomEstimate, this, no_delay);
   // Queue of one: always work on the newest frame, never on a backlog.
-  image_sub_ = image_transport_.subscribe("ardrone/bottom/image_raw", 1, &PlatformDetectionRos::onImage, this);
+  image_sub_ = image_transport_.subscribe("ardrone/bottom/image_raw", 1, &PlatformDetectionRos::onImage, this,
+                                          image_transport::TransportHints("raw", no_delay));
   ROS_INFO("platform_detection: looking for a %.2f m pad whose top is %.3f m above the ground",
            config_.localizer.detector.pad.side, config_.localizer.height.height_landing_platform);
 }

@@ -1,26 +1,46 @@
 // Tracks the landing pad in the world frame from noisy position fixes and predicts its path. ROS-free.
 //
-// Estimator: an interacting-multiple-model (IMM) filter of two extended Kalman filters sharing the
-// coordinated-turn-with-tangential-acceleration model (turn_acceleration_model.h). They differ only in
-// process noise: a "steady" mode (low noise: smooth, accurate predictions on lines and circles) and a
-// "manoeuvre" mode (noise x manoeuvre_covariance_scale: follows the onset of braking, accelerating and
-// turn reversals within a few frames). Why:
-// - A circle and a straight line are exact solutions of the model, so the 1 s-ahead prediction has no
-//   model bias there, unlike a constant-acceleration KF (whose bias v*omega^2*T^3/6 is 4.5 cm on a
-//   10 m circle at 3 m/s and 1 m for a car at 25 m/s on a 50 m circle).
+// Estimator: an interacting-multiple-model (IMM) filter of two extended Kalman filters sharing the model
+// of a turn with tangential acceleration on a signed speed (turn_acceleration_model.h). They differ only
+// in process noise: a "steady" mode (low noise: smooth, accurate predictions on lines and circles) and a
+// "manoeuvre" mode (jerk and turn noise x manoeuvre_covariance_scale: follows changes of acceleration and
+// turn rate). Why:
+// - A circle, a straight line, a stop, a pull-away from rest and a reversal through zero speed are all
+//   exact solutions of the model, so the prediction has no model bias there, unlike a constant-
+//   acceleration KF (whose bias v*omega^2*T^3/6 is 4.5 cm on a 10 m circle at 3 m/s and 1 m for a car at
+//   25 m/s on a 50 m circle) or a Cartesian-velocity turn model (whose tangential acceleration vanishes
+//   at rest, so it lagged every pull-away and reversal by 0.4-0.5 s).
 // - One noise level cannot serve both: low noise gives centimetre predictions in steady motion but
 //   lags (and then gates out) 1-3 m/s^2 speed changes; high noise follows them but makes every
 //   prediction noisy. The IMM weighs the two modes by how well each explains the fixes.
-// - Both modes have the same state, so mixing needs no state augmentation, and the cost is two 7-state
-//   EKFs (microseconds per fix).
+// - Both modes have the same state, so mixing needs no state augmentation (only the heading's
+//   wrap-around), and the cost is two 7-state EKFs and the onset hypotheses below (tens of microseconds
+//   per fix).
+// - The heading is unknown when a track starts and unobservable at standstill, where the polar EKF
+//   cannot recover from a wrong one. So a track starts with a Cartesian velocity and acceleration, and
+//   takes the direction of its velocity as heading once that is known to heading_acquisition_std; a
+//   heading that becomes more uncertain than heading_loss_std (e.g. after a long stop with turn noise)
+//   is given up again for the Cartesian form.
+// - Manoeuvre onsets: a vehicle that pulls away, brakes or turns in changes its acceleration at once, a
+//   step the IMM only takes up over some 0.3-0.5 s. So every fix also opens the hypothesis "the
+//   acceleration (along or across the velocity) stepped right after this fix"; the fixes of the last
+//   onset_window accumulate, on the linearised filter, the evidence for each (a generalised likelihood
+//   ratio test, Willsky and Jones 1976), and the most likely step is applied to every mode once its
+//   log-likelihood ratio exceeds onset_threshold.
+// - Stops: the filter integrates the exact model, under which a braking vehicle reverses through zero
+//   speed (right for a reversal). Where its speed crosses zero, the hypothesis "it stopped there" (a
+//   step of known size) is tested the same way against stop_threshold, and applied if it wins.
+//   Predictions (stateAt ahead of the state, predictPath) end a braking at rest rather than reversing,
+//   the usual outcome.
 //
 // Measurements: vision positions (x, y, z) and, optionally, GPS-like (x, y) fixes, each with its own
 // variance, applied at their own timestamps. A fix not newer than the filter state or than the previous
 // fix of its source is dropped. A fix that no mode explains (squared Mahalanobis distance above
 // gate_threshold in every mode) is rejected; after max_consecutive_rejections in a row the track restarts
 // on the latest fix (the platform really moved, e.g. during a long blackout). GPS is fused only when
-// vision has been absent for gps_vision_timeout. Without accepted fixes the filter coasts for
-// max_coast_time, then reports the track lost; the next fix starts a new track.
+// vision has been absent for gps_vision_timeout; a track that starts on a GPS fix starts from the
+// vehicle's reported velocity if given. Without accepted fixes the filter coasts for max_coast_time, then
+// reports the track lost; the next fix starts a new track.
 #pragma once
 
 #include "ped_traj_pred/turn_acceleration_model.h"
@@ -39,16 +59,33 @@ namespace ped_traj_pred
 struct FilterParameters
 {
   // Process noise of the steady mode, as continuous-time white-noise intensities.
-  double model_covariance = 1e-4;       ///< tangential jerk, drives a_t [m^2/s^5]
-  double turn_rate_covariance = 1e-5;  ///< turn-rate acceleration, drives omega [rad^2/s^3]
-  double velocity_covariance = 1e-5;   ///< unmodelled acceleration on vx, vy [m^2/s^3]
+  double model_covariance = 1e-5;       ///< jerk, drives the tangential acceleration a [m^2/s^5]
+  double turn_rate_covariance = 2e-6;  ///< turn-rate acceleration, drives omega [rad^2/s^3]
+  /// Unmodelled acceleration on the horizontal velocity, along and across the heading, in both modes
+  /// (across, it turns the heading; a large value would make a vehicle at rest forget its heading).
+  double velocity_covariance = 1e-5;   ///< [m^2/s^3]
   double height_covariance = 1e-4;      ///< random walk of the pad height pz [m^2/s]
   // Manoeuvre mode and mode switching.
-  double manoeuvre_covariance_scale = 1e4;  ///< manoeuvre-mode noise / steady-mode noise [-]
-  double steady_mode_duration = 60.0;          ///< mean time before the steady mode ends [s]
+  double manoeuvre_covariance_scale = 5e4;  ///< manoeuvre-mode jerk and turn noise / steady-mode ones [-]
+  /// Manoeuvre-mode white acceleration along the heading (on the whole velocity while the heading is
+  /// unknown): lets the speed follow the first frames of a braking or a pull-away before a has.
+  double manoeuvre_acceleration_covariance = 0.1;  ///< [m^2/s^3]
+  double steady_mode_duration = 100.0;          ///< mean time before the steady mode ends [s]
   double manoeuvre_mode_duration = 4.0;       ///< mean time before a manoeuvre ends [s]
+  // Manoeuvre onsets: a step in the acceleration, along or across the velocity, searched over the last
+  // onset_window, with this prior std, applied when its log-likelihood ratio exceeds onset_threshold.
+  double onset_window = 1.0;             ///< [s]
+  double onset_acceleration_std = 0.8;   ///< [m/s^2]
+  double onset_threshold = 8.0;          ///< [-]
+  /// A braking vehicle whose speed crossed zero is taken as stopped there, rather than reversing, once
+  /// the log-likelihood ratio of the two exceeds this (the filter itself assumes a reversal).
+  double stop_threshold = 1.5;             ///< [-]
   // Measurement noise.
-  double observation_covariance = 9e-4;      ///< vision position variance, per axis [m^2]
+  double observation_covariance = 9e-4;      ///< vision position variance per axis when the range is unknown [m^2]
+  // With the camera's range to the pad known, the vision std is sqrt(floor^2 + (per_metre * range)^2): pixel
+  // noise grows with the range, the drone's own position jitter (in every world fix) does not.
+  double observation_std_floor = 0.01;       ///< [m]
+  double observation_std_per_metre = 0.0075; ///< [m/m]
   double gps_observation_covariance = 0.09;  ///< GPS position variance, per axis [m^2]
   double gps_vision_timeout = 0.5;  ///< GPS is fused only when vision has been absent this long [s]
   double gps_pad_height = 0.497;    ///< pad height assumed when GPS starts a track [m]
@@ -58,15 +95,24 @@ struct FilterParameters
   double gate_threshold = 25.0;         ///< squared Mahalanobis distance of an outlier [-] (5 sigma)
   int max_consecutive_rejections = 10;  ///< restart the track after this many outliers in a row [-]
   // Initial uncertainty of what one position fix cannot tell.
-  double initial_velocity_std = 10.0;     ///< [m/s]
-  double initial_acceleration_std = 2.0;  ///< [m/s^2]
-  double initial_turn_rate_std = 0.5;     ///< [rad/s]
+  double initial_velocity_std = 10.0;     ///< per axis [m/s]
+  double initial_acceleration_std = 2.0;  ///< per axis [m/s^2]
+  /// Also the turn rate's std when the heading is acquired, if the velocity told it less well, and the
+  /// bound on a sudden turn-rate change of a slow vehicle (onsets) [rad/s].
+  double initial_turn_rate_std = 0.5;
+  // Heading: acquired (polar form) once the velocity's direction is known to this std, given up again
+  // (Cartesian form) beyond heading_loss_std.
+  double heading_acquisition_std = 0.1;  ///< [rad]
+  double heading_loss_std = 0.5;         ///< > heading_acquisition_std [rad]
   // Numerics of the model.
-  double low_speed_regularisation = 0.1;  ///< eps: below this speed a_t fades out [m/s]
+  /// eps: the cross-track noise turns the heading by intensity / (s^2 + eps^2), bounded at rest [m/s]
+  double low_speed_regularisation = 0.1;
   double max_integration_step = 0.01;     ///< RK4 / covariance sub-step [s]
 
   /// Empty if valid, else "<name> must be ..." for the first invalid value.
   std::string validate() const;
+  /// Vision variance per axis [m^2] of a fix taken from `range` metres away.
+  double visionVariance(double range) const;
 };
 
 /// Estimated pad state at one instant, world frame.
@@ -77,10 +123,11 @@ struct PadState
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();              ///< [m/s]; z is 0 by the model
   Eigen::Matrix3d position_covariance = Eigen::Matrix3d::Zero();   ///< [m^2]
   Eigen::Matrix2d velocity_covariance = Eigen::Matrix2d::Zero();   ///< of (vx, vy) [m^2/s^2]
-  double tangential_acceleration = 0.0;                            ///< [m/s^2]
+  double tangential_acceleration = 0.0;  ///< along the velocity (speeding up > 0) [m/s^2]
   double turn_rate = 0.0;                                          ///< [rad/s], counter-clockwise > 0
   double turn_rate_variance = 0.0;                                 ///< [rad^2/s^2]
   double manoeuvre_probability = 0.0;                              ///< [-]
+  bool heading_known = false;  ///< polar form; else the track has not (or no longer) a heading
 };
 
 /// One point of a predicted path.
@@ -112,11 +159,16 @@ public:
   /// Throws std::invalid_argument if parameters.validate() finds an invalid value.
   explicit PadMotionFilter(const FilterParameters& parameters);
 
-  /// Vision fix of the pad centre at `stamp` [s], world frame [m].
-  MeasurementOutcome addVision(double stamp, const Eigen::Vector3d& position);
+  /// Vision fix of the pad centre at `stamp` [s], world frame [m], with its variance per axis [m^2]
+  /// (observation_covariance when not given).
+  MeasurementOutcome addVision(double stamp, const Eigen::Vector3d& position, double variance = -1.0);
   /// GPS-like fix of the pad centre's horizontal position at `stamp` [s] [m] (the caller moves it from
-  /// the receiver to the pad centre).
-  MeasurementOutcome addGps(double stamp, const Eigen::Vector2d& position_xy);
+  /// the receiver to the pad centre), with the vehicle's velocity [m/s] and its variance per axis
+  /// [m^2/s^2] if the receiver reports them: a track that starts on this fix starts from that velocity
+  /// (and so, when moving, with a heading) instead of an unknown one.
+  MeasurementOutcome addGps(double stamp, const Eigen::Vector2d& position_xy,
+                            const std::optional<Eigen::Vector2d>& velocity = std::nullopt,
+                            double velocity_variance = -1.0);
 
   /// A track exists and its last accepted fix is at most max_coast_time older than `now` [s].
   bool isTracking(double now) const;
@@ -145,24 +197,69 @@ private:
     std::array<Model::Vector, kModes> x;
     std::array<Model::Matrix, kModes> P;
     Eigen::Vector2d probabilities;  ///< predicted mode probabilities c_j
+    Eigen::Matrix2d mixing;         ///< mixing(i, j): weight of mode i in mode j's start
+    std::array<Model::Matrix, kModes> transition;  ///< linearised, over the prediction
+  };
+  using OnsetMatrix = Eigen::Matrix<double, Model::kSize, 2>;
+  /// A hypothetical manoeuvre onset right after the fix at `time`: a step of unknown size in the
+  /// acceleration along and across the velocity, or, for a stop, the known step in (s, a) that brings a
+  /// braking vehicle to rest where its speed crossed zero. How a unit step along each column would have
+  /// moved the true state (`truth`) and each mode's estimate since, and what the fixes since say about
+  /// it: a generalised likelihood ratio test (Willsky and Jones 1976) on the linearised IMM.
+  struct OnsetHypothesis
+  {
+    double time = 0.0;
+    OnsetMatrix truth;
+    std::array<OnsetMatrix, kModes> estimate;
+    Eigen::Matrix2d information = Eigen::Matrix2d::Zero();  ///< sum of Gamma^T S^-1 Gamma
+    Eigen::Vector2d score = Eigen::Vector2d::Zero();        ///< sum of Gamma^T S^-1 innovation
+    std::optional<Eigen::Vector2d> known_step;  ///< a stop; else unknown, std onset_acceleration_std
+  };
+
+  /// A velocity to start a track from, with its variance per axis.
+  struct StartVelocity
+  {
+    Eigen::Vector2d velocity;
+    double variance;
   };
 
   template <int M>
   MeasurementOutcome addFix(Source source, double stamp, const Eigen::Matrix<double, M, 1>& z,
-                            const Eigen::Matrix<double, M, Model::kSize>& H, double variance);
+                            const Eigen::Matrix<double, M, Model::kSize>& H, double variance,
+                            const std::optional<StartVelocity>& start_velocity = std::nullopt);
+  /// Starts a track in the Cartesian form (heading unknown), then acquires the heading if `velocity`
+  /// already tells it.
   void startTrack(Source source, double stamp, const Eigen::Vector3d& position, double position_variance,
-                  double height_variance, const Eigen::Vector2d& velocity);
-  ModePrediction predictModes(double time) const;
-  /// Moment-matched mean and covariance of the mode mixture.
-  static void combine(const std::array<Model::Vector, kModes>& x, const std::array<Model::Matrix, kModes>& P,
-                      const Eigen::Vector2d& weights, Model::Vector& x_out, Model::Matrix& P_out);
-  Model::Vector combinedMean() const;
+                  double height_variance, const StartVelocity& velocity);
+  /// Acquires or gives up the heading (polar / Cartesian form) by its uncertainty.
+  void updateForm();
+  /// Opens a hypothesis of a step along `directions` right after the fix at `stamp`.
+  void openOnset(double stamp, const OnsetMatrix& directions, const std::optional<Eigen::Vector2d>& known_step);
+  /// Advances every onset hypothesis over a fix that updated the modes with gains K, and opens one
+  /// at this fix.
+  template <int M>
+  void trackOnsets(double stamp, const ModePrediction& predicted, const Eigen::Matrix<double, M, Model::kSize>& H,
+                   const std::array<Eigen::Matrix<double, M, 1>, kModes>& innovation,
+                   const std::array<Eigen::Matrix<double, M, M>, kModes>& S,
+                   const std::array<Eigen::Matrix<double, Model::kSize, M>, kModes>& K);
+  /// Applies the most likely stop if it passes stop_threshold, else the most likely onset if it passes
+  /// onset_threshold, to every mode.
+  void applyOnset();
+  /// `for_output`: the prediction ends a braking at rest (Model::propagateMean).
+  ModePrediction predictModes(double time, bool for_output) const;
+  /// Moment-matched mean and covariance of the mode mixture (heading averaged on the circle).
+  void combine(const std::array<Model::Vector, kModes>& x, const std::array<Model::Matrix, kModes>& P,
+               const Eigen::Vector2d& weights, Model::Vector& x_out, Model::Matrix& P_out) const;
+  /// Combined mean and covariance at `time` as published, and the manoeuvre probability.
+  void combinedAt(double time, Model::Vector& x, Model::Matrix& P, double& manoeuvre_probability) const;
 
   FilterParameters params_;
   Model model_;
-  std::array<Model::Matrix, kModes> noise_density_;
+  std::array<Model::Noise, kModes> noise_;
 
   bool initialised_ = false;
+  Model::Form form_ = Model::Form::kCartesian;
+  std::vector<OnsetHypothesis> onsets_;  // oldest first
   std::array<Model::Vector, kModes> x_;
   std::array<Model::Matrix, kModes> P_;
   Eigen::Vector2d mode_probabilities_;

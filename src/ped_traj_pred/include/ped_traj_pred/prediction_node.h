@@ -2,7 +2,10 @@
 //
 // Subscribes (relative names, from parameters):
 //   pose_topic  geometry_msgs/PointStamped  pad centre detections in world_frame
-//   gps_topic   nav_msgs/Odometry           vehicle GPS fix (optional; empty name disables it)
+//   relative_pose_topic  geometry_msgs/PointStamped  the same detections relative to the drone (optional;
+//               their range sets each fix's variance, see FilterParameters::visionVariance)
+//   gps_topic   nav_msgs/Odometry           vehicle GPS fix and world-frame velocity (optional; empty name
+//               disables it; the velocity, if its covariance is given, starts a track from GPS with a heading)
 // Publishes at pub_freq [Hz] in ROS (sim) time while the track is alive:
 //   future_path_topic  nav_msgs/Path      pad positions at now + k*time_step, k = 0..path_time/time_step
 //   odom_topic         nav_msgs/Odometry  filtered pad position and world-frame velocity, with covariances
@@ -39,6 +42,9 @@ public:
 private:
   void onDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
   void onGps(const nav_msgs::Odometry::ConstPtr& msg);
+  void onRelativeDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
+  /// Variance of a world fix stamped `stamp`, from the range of the relative fix of the same frame.
+  double visionVariance(const ros::Time& stamp) const;
   void onTimer(const ros::TimerEvent& event);
   /// One tick: log track changes, publish the prediction while tracking.
   void step(const ros::Time& now);
@@ -55,7 +61,8 @@ private:
   Eigen::Vector2d gps_pad_offset_;  // pad centre in the vehicle frame relative to the GPS point [m]
 
   PadMotionFilter filter_;
-  ros::Subscriber detection_sub_, gps_sub_;
+  ros::Subscriber detection_sub_, gps_sub_, relative_sub_;
+  std::optional<std::pair<ros::Time, double>> last_range_;  // stamp and camera range of the latest relative fix
   ros::Publisher path_pub_, odom_pub_;
   ros::Timer timer_;
   bool tracking_ = false;     // as of the last timer tick, for logging the transitions once

@@ -18,6 +18,7 @@ enum class PathKind
   kFigure8,       ///< circles of alternating direction, one full loop each
   kStopAndGo,     ///< speed for 5 s, stopped for 3 s (as summit_moves)
   kAcceleration,  ///< 1 m/s for 8 s, then `speed` for 8 s, repeated
+  kBackAndForth,  ///< 2*radius forward, then the same backward (as summit_moves): the speed reverses through 0
 };
 
 struct TrajectorySpec
@@ -44,6 +45,9 @@ public:
   const Eigen::Vector3d& position(int index) const { return positions_.at(index); }
   const Eigen::Vector2d& velocity(int index) const { return velocities_.at(index); }
   const TrajectorySpec& spec() const { return spec_; }
+  /// Instants [s] at which the motion changes character: a speed or yaw-rate ramp starts or ends, or the
+  /// speed passes through zero. A filter lags most right after them.
+  const std::vector<double>& manoeuvreTimes() const { return manoeuvre_times_; }
 
   /// Commanded (speed [m/s], yaw rate [rad/s]) at time t, before the vehicle's limits.
   static Eigen::Vector2d command(const TrajectorySpec& spec, double t);
@@ -53,6 +57,7 @@ private:
   double sample_rate_hz_;
   std::vector<Eigen::Vector3d> positions_;
   std::vector<Eigen::Vector2d> velocities_;
+  std::vector<double> manoeuvre_times_;
 };
 
 }  // namespace ped_traj_pred
