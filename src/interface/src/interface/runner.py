@@ -55,11 +55,15 @@ class FlightMonitor:
     """Watches a run from inside the graph and decides when it is over (ROS-bound part of the runner)."""
 
     def __init__(self, s, wall_timeout):
+        import rosgraph
         import rospy
         from landing_msgs.msg import PositionXYCommand, Touchdown
         from geometry_msgs.msg import PoseStamped
         from std_msgs.msg import String
         self.rospy, self.s = rospy, s
+        # rospy picks its clock at init_node: set /use_sim_time here rather than race roslaunch setting it,
+        # or the runner may count wall time and end the flight at once.
+        rosgraph.Master("/scenario_runner").setParam("/use_sim_time", True)
         rospy.init_node("scenario_runner", disable_signals=True)
         self.touchdown, self.touchdown_wall = None, None
         # Ground-truth poses by stamp: drone and pad are published in the same simulator step, and only

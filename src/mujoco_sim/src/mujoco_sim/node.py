@@ -308,6 +308,8 @@ class SimNode:
                 rospy.logwarn_throttle(10.0, "parameter /%s was deleted; keeping %s and restoring it" % (
                     name, self.conditions[name]))
                 rospy.set_param("/" + name, self.conditions[name])
+                if name == "drone_battery":
+                    self.battery_written = self.conditions[name]
                 continue
             if name == "drone_battery" and raw == self.battery_written:
                 continue  # our own mirror, not an operator's change
@@ -329,8 +331,11 @@ class SimNode:
         # Mirror the level, unless the operator's last value was rejected: overwriting it would hide the
         # bad input from the supervisor, which must treat an unreadable battery as the unsafe case.
         if level != self.battery_written and "drone_battery" not in self.rejected:
-            rospy.set_param("/drone_battery", level)
-            self.battery_written = level
+            # The cache may not hold an operator's value set a moment ago: ask the master itself, so the
+            # mirror never overwrites it (the next poll then reads it as an operator's change).
+            if rospy.get_param("/drone_battery", None) == self.battery_written:
+                rospy.set_param("/drone_battery", level)
+                self.battery_written = level
 
     def _publish_camera(self, stamp):
         t0 = time.perf_counter()
