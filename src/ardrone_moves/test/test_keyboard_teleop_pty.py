@@ -133,6 +133,7 @@ def spawn_keyboard(ros_env, **streams):
                              "__name:=keyboard_teleop"], env=ros_env, start_new_session=True, **streams)
 
 
+@pytest.mark.needs_pty
 def test_keys_typed_in_a_terminal_fly_the_drone_and_the_terminal_is_restored(ros_env, probe):
     master, terminal = os.openpty()
     original_mode = termios.tcgetattr(terminal)

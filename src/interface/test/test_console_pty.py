@@ -97,6 +97,7 @@ def operator_commands(ros_env):
     stop(echo)
 
 
+@pytest.mark.needs_pty
 def test_keys_in_a_terminal_open_flight_management_and_choose_the_landing_mode(ros_env, operator_commands):
     master, slave = pty.openpty()
     env = dict(ros_env, TERM="xterm-256color", COLUMNS="120", LINES="40")

@@ -166,6 +166,17 @@ def test_sensor_watchdog_counts_from_start_and_from_the_last_message():
     assert watchdog.silence("imu", 11.5) == pytest.approx(1.0)
 
 
+def test_sensor_watchdog_counts_a_late_connection_from_when_it_connected():
+    watchdog = SensorWatchdog(["gps"])
+    assert watchdog.silence("gps", 0.0) == 0.0
+    watchdog.connected("gps", 1.2)           # the publisher connected late: its first fixes were lost
+    assert watchdog.silence("gps", 1.5) == pytest.approx(0.3)
+    watchdog.connected("gps", 5.0)           # a reconnection does not reset it: only the first counts
+    assert watchdog.silence("gps", 6.0) == pytest.approx(4.8)
+    watchdog.seen("gps", 6.0)
+    assert watchdog.silence("gps", 6.5) == pytest.approx(0.5)
+
+
 def test_platform_speed_prefers_the_vehicle_report_then_falls_back_to_the_kalman_filter():
     speed = PlatformSpeed(filtered_timeout_s=1.0, window_s=1.0)
     assert speed.value(0.0) is PENDING       # start-up: the first report has not had time to come

@@ -14,6 +14,7 @@ import collections
 import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped, PoseStamped
+from landing_msgs.lockstep import LockstepAcker
 from nav_msgs.msg import Odometry, Path
 
 
@@ -54,7 +55,7 @@ class StandIn:
         self._remember(self.truth_history, msg, self._xyz(msg.pose.pose.position))
 
     def on_estimate(self, msg):
-        self._remember(self.estimate_history, msg, self._xyz(msg.pose.pose.position))
+        self._remember(self.estimate_history, msg, self._xyz(msg.pose.pose.position), keep=300)
 
     def sample(self):
         t = rospy.get_time()
@@ -100,9 +101,13 @@ def main():
     node = StandIn()
     while not rospy.is_shutdown() and rospy.get_time() == 0.0:
         rospy.sleep(0.01)
-    rate = rospy.Rate(rospy.get_param("~rate_hz", 30.0))
+    rate_hz = rospy.get_param("~rate_hz", 30.0)
+    rate = rospy.Rate(rate_hz)
+    # Like the vision it stands in for, it holds the simulator back rather than fall behind it.
+    lockstep = LockstepAcker(period=1.0 / rate_hz)
     while not rospy.is_shutdown():
         node.sample()
+        lockstep.ack(rospy.Time.now())
         try:
             rate.sleep()
         except (rospy.ROSTimeMovedBackwardsException, rospy.ROSInterruptException):

@@ -21,20 +21,30 @@ def flight_from_navdata(state):
 
 class SensorWatchdog:
     """Sim seconds since each sensor topic last published. A sensor never heard of counts from the
-    moment the watchdog started, so a topic that never comes is reported missing after the timeout."""
+    moment the watchdog started, so a topic that never comes is reported missing after the timeout;
+    or, once its publisher has connected, from that moment: on a loaded machine the connection may come
+    later than the sensor's first messages, and a sensor that is there must not be called missing."""
 
     def __init__(self, names):
         self.last = {name: None for name in names}
+        self.connected_at = {name: None for name in names}
         self.start = None
 
     def seen(self, name, t):
         self.last[name] = t
 
+    def connected(self, name, t):
+        """The topic's first publisher connected at ``t``."""
+        if self.connected_at[name] is None:
+            self.connected_at[name] = t
+
     def silence(self, name, t):
         if self.start is None:
             self.start = t
         last = self.last[name]
-        return max(0.0, t - (self.start if last is None else last))
+        if last is None:
+            last = max(self.start, self.connected_at[name] or self.start)
+        return max(0.0, t - last)
 
 
 class PlatformSpeed:

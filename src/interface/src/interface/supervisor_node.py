@@ -29,6 +29,7 @@ from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer,
 SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/camera_info", "imu_silence_s": "ardrone/imu",
                  "odometry_silence_s": "ardrone/gps/odom", "sonar_silence_s": "ardrone/sonar_height"}
 SERVICES = ("landing", "emergency", "manual", "continue")
+PARAM_VERIFY_PERIOD_S = 1.0  # how often the condition parameters are read from the master, not the cache [s]
 NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
     "rate_hz": (5.0, 200.0),
     "platform_odom_timeout_s": (0.05, 60.0),
@@ -96,9 +97,9 @@ class SupervisorNode:
         self.pub_allowed = rospy.Publisher("landing_allowed", Bool, queue_size=1, latch=True)
         self.pub_tracker = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
 
-        for name, topic in SENSOR_TOPICS.items():
-            # AnyMsg: only the arrival matters, nothing is deserialised.
-            rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
+        # AnyMsg: only the arrival matters, nothing is deserialised.
+        self.sensor_subscribers = {name: rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
+                                   for name, topic in SENSOR_TOPICS.items()}
         rospy.Subscriber("kalman_platform_odom", Odometry, self._on_platform_odom, queue_size=1)
         rospy.Subscriber("summit_xl/gps/odom", Odometry, self._on_vehicle_gps, queue_size=5)
         rospy.Subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
@@ -110,6 +111,7 @@ class SupervisorNode:
                 rospy.set_param("/" + name, value)
                 rospy.loginfo("supervisor: /%s was not set: starting from %g (thesis Flight Management default)",
                               name, value)
+        self.params_verified_at, self.param_overrides = 0.0, {}
         # Subscribe to every condition parameter now, so the master pushes changes from here on.
         for name in self.table.params():
             self._read_param(name)
@@ -162,17 +164,39 @@ class SupervisorNode:
         return accepted, message
 
     @staticmethod
-    def _read_param(name):
+    def _read_param(name, cached=True):
         try:
-            return rospy.get_param_cached("/" + name)  # pushed by the master: no XML-RPC round trip per poll
+            # Cached: pushed by the master, no XML-RPC round trip per poll.
+            return rospy.get_param_cached("/" + name) if cached else rospy.get_param("/" + name)
         except KeyError:
             return MISSING
 
+    def _condition_values(self, t):
+        """The condition parameters, from the cache. The master pushes updates from concurrent writers (the
+        simulator's battery mirror, an operator) in no guaranteed order, so the cache may keep an older
+        value: every PARAM_VERIFY_PERIOD_S the master itself is asked, and its value wins until the
+        cache changes again."""
+        cached = {name: self._read_param(name) for name in self.table.params()}
+        if t - self.params_verified_at >= PARAM_VERIFY_PERIOD_S or t < self.params_verified_at:
+            self.params_verified_at = t
+            for name in cached:
+                actual = self._read_param(name, cached=False)
+                if actual != cached[name]:
+                    self.param_overrides[name] = (actual, cached[name])
+        for name, (actual, stale) in list(self.param_overrides.items()):
+            if cached[name] == stale:
+                cached[name] = actual
+            else:
+                del self.param_overrides[name]  # a newer push arrived
+        return cached
+
     def _readings(self, t):
-        readings = {name: self._read_param(name) for name in self.table.params()}
+        readings = self._condition_values(t)
         readings["platform_speed"] = self.platform.value(t)
         readings["target_lost_s"] = self.target.value(t)
-        for name in SENSOR_TOPICS:
+        for name, subscriber in self.sensor_subscribers.items():
+            if subscriber.get_num_connections() > 0:
+                self.watchdog.connected(name, t)
             readings[name] = self.watchdog.silence(name, t)
         return readings
 

@@ -322,6 +322,8 @@ class SimNode:
                     self.conditions[name] = value
                     changed = True
                     self.rejected.pop(name, None)
+                    if name == "drone_battery":
+                        self.battery_written = raw  # the operator's value on the master: mirror over it
                 elif raw != value:
                     self.rejected[name] = raw
         if changed:
