@@ -9,6 +9,7 @@ Like uav_vision, it anchors the pad's world position on the drone's own estimate
 pad = ardrone/odom_estimate + (true pad - true drone) + noise.
 Parameters (private): ~noise [m] 0.03, ~latency [s] 0.03 (about one camera frame, as the detector under lock-step), ~rate_hz 30, ~path_time [s] 2, ~time_step [s] 0.1.
 """
+import bisect
 import collections
 
 import numpy as np
@@ -59,16 +60,26 @@ class StandIn:
 
     def sample(self):
         t = rospy.get_time()
-        pads = dict(list(self.pad_history.items()))  # a copy: the callbacks add to it meanwhile
-        stamps = [s for s in pads if s in self.truth_history and s in self.estimate_history]
-        if stamps and stamps[-1] != self.last_sampled:
-            stamp = self.last_sampled = stamps[-1]
+        pads = dict(list(self.pad_history.items()))  # copies: the callbacks add to them meanwhile
+        estimates = dict(list(self.estimate_history.items()))
+        # Pad and drone ground truth come from the same simulator step; the estimate (IMU rate) nearest to
+        # it, for the newest such step the estimate has reached.
+        estimate_stamps = sorted(estimates)
+        stamp = estimate_stamp = None
+        for candidate in sorted((s for s in pads if s in self.truth_history), reverse=True):
+            i = bisect.bisect_left(estimate_stamps, candidate)
+            near = [e for e in estimate_stamps[max(0, i - 1):i + 1] if abs(e - candidate) <= 0.015]
+            if near:
+                stamp, estimate_stamp = candidate, near[-1]
+                break
+        if stamp is not None and stamp != self.last_sampled:
+            self.last_sampled = stamp
             pad = pads[stamp]
             old_stamp = min(s for s in pads if s >= stamp - 0.1)
             velocity = (pad - pads[old_stamp]) / max(1e-3, stamp - old_stamp)
             velocity[2] = 0.0
             relative = pad - self.truth_history[stamp] + self.rng.normal(0.0, self.noise, 3)
-            self.queue.append((t + self.latency, stamp, self.estimate_history[stamp] + relative, velocity, relative))
+            self.queue.append((t + self.latency, stamp, estimates[estimate_stamp] + relative, velocity, relative))
         while self.queue and self.queue[0][0] <= t:
             _, stamp, seen, velocity, relative = self.queue.popleft()
             self.publish(stamp, seen, velocity, relative)

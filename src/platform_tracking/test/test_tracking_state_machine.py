@@ -133,6 +133,18 @@ def test_taking_off_gives_up_when_the_drone_never_leaves_the_ground():
     assert f.state == State.LANDED and "not acknowledged" in f.lines[-1]
 
 
+def test_taking_off_sends_the_take_off_again_while_the_drone_stays_on_the_ground():
+    f = Flight()
+    first = f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)
+    outs = f.run(P.takeoff_timeout - 0.1, drone=drone(height=0.02), navdata_state=Nav.LANDED)
+    resent = [o for o in outs if o.send_takeoff]
+    assert first.send_takeoff and len(resent) == int(P.takeoff_timeout / P.takeoff_resend_interval - 1e-9)
+    assert any("sending it again" in line for line in f.lines)
+    # Once the drone answers, nothing more is sent.
+    outs = f.run(1.5, drone=drone(height=0.3), navdata_state=Nav.TAKING_OFF)
+    assert not any(o.send_takeoff for o in outs) and f.state == State.TAKING_OFF
+
+
 def test_taking_off_tracks_the_pad_horizontally_while_climbing():
     f = Flight()
     f.step(drone=drone(height=0.02), navdata_state=Nav.LANDED, takeoff=True)

@@ -93,6 +93,7 @@ class TrackingParams:
     nominal_height: float = spec(4.0, 0.5, 50.0, "m")
     takeoff_climb_rate: float = spec(1.0, 0.1, 5.0, "m/s")
     takeoff_timeout: float = spec(3.0, 0.1, 60.0, "s")
+    takeoff_resend_interval: float = spec(1.0, 0.1, 60.0, "s")
     height_gain: float = spec(1.0, 0.0, 20.0, "1/s")
     max_climb_rate: float = spec(1.0, 0.1, 5.0, "m/s")
     fallback_pad_height: float = spec(0.497, 0.0, 10.0, "m")

@@ -113,6 +113,8 @@ class TrackingStateMachine:
         self.climbing = False
         self.blind_since_logged = False
         self.retries = 0
+        # TAKING_OFF
+        self.takeoff_resends = 0
         self.at_gate_since = None
         self.ready_since = None
         # FORCE_LANDING
@@ -132,6 +134,7 @@ class TrackingStateMachine:
         self.refusal_logged = False
         self.committed = False
         self.land_sent_at = None
+        self.takeoff_resends = 0
         self.retrying = False
         self.climbing = False
         self.blind_since_logged = False
@@ -271,6 +274,12 @@ class TrackingStateMachine:
             if t - self.entered > p.takeoff_timeout:
                 self._transition(State.LANDED, "take-off not acknowledged within %.1f s" % p.takeoff_timeout, t)
                 return
+            # A command can be lost (a connection still being set up, a radio link): ask again.
+            sent_at = self.entered + p.takeoff_resend_interval * self.takeoff_resends
+            if inp.navdata_state == Nav.LANDED and t - sent_at >= p.takeoff_resend_interval:
+                self.takeoff_resends += 1
+                self._event("take-off not acknowledged within %.1f s: sending it again" % p.takeoff_resend_interval)
+                self._out.send_takeoff = True
         elif self._external_landing(inp):
             return self._landing(inp)
         pad = self.last_pad
