@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <limits>
 #include <random>
+#include <string>
 
 namespace ped_traj_pred
 {
@@ -98,6 +99,18 @@ void printErrors(const char* name, const std::vector<double>& errors)
   const ErrorStatistics s = summarise(errors);
   std::printf("[ stats    ] %-40s velocity error 0.3 s after: mean %.3f  median %.3f  p95 %.3f  max %.3f m/s (%d)\n",
               name, s.mean, s.median, s.p95, s.max, s.count);
+}
+
+/// Prints the velocity errors after a manoeuvre and checks there were at least `min_count` of them, with
+/// a median below `median_below` and a maximum below `max_below` [m/s].
+void expectFollowed(const std::string& name, const std::vector<double>& errors, std::size_t min_count,
+                    double median_below, double max_below)
+{
+  printErrors(name.c_str(), errors);
+  ASSERT_GE(errors.size(), min_count) << name;
+  const ErrorStatistics s = summarise(errors);
+  EXPECT_LT(s.median, median_below) << name;
+  EXPECT_LT(s.max, max_below) << name;
 }
 
 /// Feeds noise-free vision fixes of a pad standing still at `position` from t0 to t1 at 30 Hz.
@@ -240,12 +253,10 @@ TEST(Manoeuvres, ReversalThroughZeroSpeedIsFollowedExactly)
 {
   for (const double speed : { 2.0, 3.0 })
   {
-    const std::vector<double> errors =
-        velocityErrorsAfter(Manoeuvre::kReversal, makePath(PathKind::kBackAndForth, speed, 10.0, 1.0, 3.0, 60.0));
-    printErrors(("back_and_forth " + std::to_string(int(speed)) + " m/s, reversal").c_str(), errors);
-    ASSERT_GE(errors.size(), 6u);
-    EXPECT_LT(summarise(errors).median, 0.05) << speed << " m/s";
-    EXPECT_LT(summarise(errors).max, 0.15) << speed << " m/s";
+    expectFollowed("back_and_forth " + std::to_string(int(speed)) + " m/s, reversal",
+                   velocityErrorsAfter(Manoeuvre::kReversal,
+                                       makePath(PathKind::kBackAndForth, speed, 10.0, 1.0, 3.0, 60.0)),
+                   6u, 0.05, 0.15);
   }
 }
 
@@ -255,32 +266,23 @@ TEST(Manoeuvres, ReversalThroughZeroSpeedIsFollowedExactly)
 // being unknown to the model). A stop, a step of known size at a known instant, is found sooner.
 TEST(Manoeuvres, PullAwayFromRestIsFollowedWithinAFewFrames)
 {
-  const std::vector<double> errors =
-      velocityErrorsAfter(Manoeuvre::kPullAway, makePath(PathKind::kStopAndGo, 1.0, 10.0, 1.0, 3.0, 60.0));
-  printErrors("stop_and_go 1 m/s, pull-away", errors);
-  ASSERT_GE(errors.size(), 15u);
-  EXPECT_LT(summarise(errors).median, 0.16);
-  EXPECT_LT(summarise(errors).max, 0.30);
+  expectFollowed("stop_and_go 1 m/s, pull-away",
+                 velocityErrorsAfter(Manoeuvre::kPullAway, makePath(PathKind::kStopAndGo, 1.0, 10.0, 1.0, 3.0, 60.0)),
+                 15u, 0.16, 0.30);
 }
 
 TEST(Manoeuvres, BrakingToAStopIsFollowedWithinAFewFrames)
 {
   for (const double speed : { 1.0, 3.0 })
   {
-    const TrajectorySpec spec = makePath(PathKind::kStopAndGo, speed, 10.0, 1.0, 3.0, 60.0);
-    const std::vector<double> braking = velocityErrorsAfter(Manoeuvre::kBraking, spec);
-    printErrors(("stop_and_go " + std::to_string(int(speed)) + " m/s, braking").c_str(), braking);
-    ASSERT_GE(braking.size(), 15u);
-    EXPECT_LT(summarise(braking).median, 0.18) << speed << " m/s";
-    EXPECT_LT(summarise(braking).max, 0.30) << speed << " m/s";
+    expectFollowed("stop_and_go " + std::to_string(int(speed)) + " m/s, braking",
+                   velocityErrorsAfter(Manoeuvre::kBraking, makePath(PathKind::kStopAndGo, speed, 10.0, 1.0, 3.0, 60.0)),
+                   15u, 0.18, 0.30);
   }
   // At 3 m/s the vehicle pulls away again the moment it stops: only the 1 m/s path stops.
-  const std::vector<double> stop =
-      velocityErrorsAfter(Manoeuvre::kStop, makePath(PathKind::kStopAndGo, 1.0, 10.0, 1.0, 3.0, 60.0));
-  printErrors("stop_and_go 1 m/s, stop", stop);
-  ASSERT_GE(stop.size(), 15u);
-  EXPECT_LT(summarise(stop).median, 0.10);
-  EXPECT_LT(summarise(stop).max, 0.22);
+  expectFollowed("stop_and_go 1 m/s, stop",
+                 velocityErrorsAfter(Manoeuvre::kStop, makePath(PathKind::kStopAndGo, 1.0, 10.0, 1.0, 3.0, 60.0)),
+                 15u, 0.10, 0.22);
 }
 
 TEST(Heading, ATrackStartedAtRestFindsItsHeadingWhenThePadPullsAway)
