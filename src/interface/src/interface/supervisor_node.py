@@ -22,7 +22,8 @@ from std_srvs.srv import Trigger, TriggerResponse
 
 from .conditions import MISSING, ConditionTableError, load_table
 from .supervisor import Flight, Settings, SettingsError, Supervisor
-from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, flight_from_navdata
+from .supervisor_measures import (PlatformSpeed, SensorWatchdog, TargetLostTimer, VerifiedParams,
+                                  flight_from_navdata)
 
 # The camera's liveness is read from camera_info, which the driver publishes with every frame: the same
 # arrivals without copying 230 kB images into this process.
@@ -111,7 +112,8 @@ class SupervisorNode:
                 rospy.set_param("/" + name, value)
                 rospy.loginfo("supervisor: /%s was not set: starting from %g (thesis Flight Management default)",
                               name, value)
-        self.params_verified_at, self.param_overrides = 0.0, {}
+        self.conditions = VerifiedParams(self.table.params(), self._read_param,
+                                         lambda name: self._read_param(name, cached=False), PARAM_VERIFY_PERIOD_S)
         # Subscribe to every condition parameter now, so the master pushes changes from here on.
         for name in self.table.params():
             self._read_param(name)
@@ -171,27 +173,8 @@ class SupervisorNode:
         except KeyError:
             return MISSING
 
-    def _condition_values(self, t):
-        """The condition parameters, from the cache. The master pushes updates from concurrent writers (the
-        simulator's battery mirror, an operator) in no guaranteed order, so the cache may keep an older
-        value: every PARAM_VERIFY_PERIOD_S the master itself is asked, and its value wins until the
-        cache changes again."""
-        cached = {name: self._read_param(name) for name in self.table.params()}
-        if t - self.params_verified_at >= PARAM_VERIFY_PERIOD_S or t < self.params_verified_at:
-            self.params_verified_at = t
-            for name in cached:
-                actual = self._read_param(name, cached=False)
-                if actual != cached[name]:
-                    self.param_overrides[name] = (actual, cached[name])
-        for name, (actual, stale) in list(self.param_overrides.items()):
-            if cached[name] == stale:
-                cached[name] = actual
-            else:
-                del self.param_overrides[name]  # a newer push arrived
-        return cached
-
     def _readings(self, t):
-        readings = self._condition_values(t)
+        readings = self.conditions.values(t)
         readings["platform_speed"] = self.platform.value(t)
         readings["target_lost_s"] = self.target.value(t)
         for name, subscriber in self.sensor_subscribers.items():
