@@ -58,7 +58,6 @@ class FlightMonitor:
         import rosgraph
         import rospy
         from landing_msgs.msg import PositionXYCommand, Touchdown
-        from geometry_msgs.msg import PoseStamped
         from std_msgs.msg import String
         self.rospy, self.s = rospy, s
         # rospy picks its clock at init_node: set /use_sim_time here rather than race roslaunch setting it,
@@ -73,8 +72,6 @@ class FlightMonitor:
         self.tracker_state, self.emergency_position = None, None
         self.decisions, self.emergency_ordered, self.landing_start = [], False, None
         rospy.Subscriber("ardrone/touchdown", Touchdown, self._on_touchdown)
-        rospy.Subscriber("groundtruth/ardrone", PoseStamped, lambda m: self._remember(self.drone_poses, m))
-        rospy.Subscriber("groundtruth/landing_pad", PoseStamped, lambda m: self._remember(self.pad_poses, m))
         rospy.Subscriber("platform_tracking/state", String, lambda m: setattr(self, "tracker_state", m.data))
         rospy.Subscriber("emergency/position", PositionXYCommand,
                          lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)]))
@@ -91,6 +88,11 @@ class FlightMonitor:
                 poses.popitem(last=False)
 
     def _on_touchdown(self, msg):
+        if self.touchdown is None:
+            # Ground truth is only read once the drone is down: two 50 Hz streams fewer during the flight.
+            from geometry_msgs.msg import PoseStamped
+            self.rospy.Subscriber("groundtruth/ardrone", PoseStamped, lambda m: self._remember(self.drone_poses, m))
+            self.rospy.Subscriber("groundtruth/landing_pad", PoseStamped, lambda m: self._remember(self.pad_poses, m))
         if self.touchdown is None or msg.header.stamp.to_sec() > self.touchdown.header.stamp.to_sec():
             self.touchdown = msg
 
@@ -113,7 +115,7 @@ class FlightMonitor:
         while not condition():
             if time.monotonic() > deadline:
                 raise TimeoutError("%s within the time allowed (tracker state %r)" % (what, self.tracker_state))
-            time.sleep(0.1)
+            time.sleep(0.02)
 
     def wait_for_graph(self, timeout=120.0):
         """Until every needed topic is advertised and the landing stack (if any) reports its state."""
@@ -183,7 +185,7 @@ class FlightMonitor:
                 # After an emergency landing, wait for the coordinates the emergency module reports.
                 settle = EMERGENCY_REPORT_WAIT_S if self.emergency_ordered and self.emergency_position is None \
                     else SETTLE_AFTER_TOUCHDOWN_S
-                if self.touchdown.crashed or t >= touchdown_time + settle:
+                if self.touchdown.crashed or self._latest_common_pose_time() >= touchdown_time + settle:
                     return
             if t >= time_limit:
                 return
@@ -191,13 +193,48 @@ class FlightMonitor:
                 raise TimeoutError("wall-clock limit reached at sim time %.1f s" % t)
             time.sleep(0.02)
 
-    def resting_pad_error(self):
-        """Horizontal drone-to-pad distance at the latest instant both poses are known for."""
+    def _latest_common_stamp(self):
         with self.poses_lock:
             common = [stamp for stamp in self.drone_poses if stamp in self.pad_poses]
-            if not common:
-                return None
-            drone, pad = self.drone_poses[common[-1]], self.pad_poses[common[-1]]
+        return common[-1] if common else None
+
+    def _latest_common_pose_time(self):
+        stamp = self._latest_common_stamp()
+        return float("-inf") if stamp is None else stamp.to_sec()
+
+    def scored(self, error, sim_start, sim_time, flight_wall):
+        """The result.json fields of the flight (SPEC section 7) from what was seen; ``error``: why the run
+        was cut short, or None."""
+        touchdown, resting_error = self.touchdown, self.resting_pad_error()
+        outcome, touchdown_error = scoring.outcome(touchdown, resting_error, self.emergency_ordered)
+        touchdown_time = touchdown.header.stamp.to_sec() if touchdown else None
+        return {
+            "outcome": outcome if error is None else "timeout",
+            "touchdown_error_m": touchdown_error,
+            "time_to_land_s": round(touchdown_time - (self.landing_start or sim_start), 3)
+            if touchdown_time is not None and not touchdown.crashed else None,
+            "decisions": self.decisions,
+            "emergency_position": self.emergency_position,
+            "sim_time_s": round(sim_time, 3),
+            "real_time_factor": round((sim_time - sim_start) / flight_wall, 3) if flight_wall > 0 else None,
+            "touchdown": None if touchdown is None else {
+                "surface": {1: "pad", 2: "ground", 3: "vehicle"}.get(touchdown.surface, "unknown"),
+                "crashed": touchdown.crashed, "impact_speed_mps": round(touchdown.impact_speed, 3),
+                "pad_error_m": round(touchdown.pad_error, 4),
+                "resting_pad_error_m": None if resting_error is None else round(resting_error, 4),
+                "position": [round(touchdown.position.x, 3), round(touchdown.position.y, 3),
+                             round(touchdown.position.z, 3)]},
+            "tracker_final_state": self.tracker_state,
+            "error": error,
+        }
+
+    def resting_pad_error(self):
+        """Horizontal drone-to-pad distance at the latest instant both poses are known for."""
+        stamp = self._latest_common_stamp()
+        if stamp is None:
+            return None
+        with self.poses_lock:
+            drone, pad = self.drone_poses[stamp], self.pad_poses[stamp]
         return ((drone.x - pad.x) ** 2 + (drone.y - pad.y) ** 2) ** 0.5
 
 
@@ -230,6 +267,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             monitor.release()
             sim_start = monitor.rospy.get_time()
             wall_flight_start = time.monotonic()
+            startup_wall = wall_flight_start - wall_start
             try:
                 monitor.run(EventSchedule(events), s["time_limit_s"])
                 error = None
@@ -237,31 +275,16 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
                 error = str(err)
             sim_time = monitor.rospy.get_time()
             flight_wall = time.monotonic() - wall_flight_start
-        outcome, touchdown_error = scoring.outcome(monitor.touchdown, monitor.resting_pad_error(),
-                                                   monitor.emergency_ordered)
-        touchdown_time = monitor.touchdown.header.stamp.to_sec() if monitor.touchdown else None
-        result.update({
-            "outcome": outcome if error is None else "timeout",
-            "touchdown_error_m": touchdown_error,
-            "time_to_land_s": round(touchdown_time - (monitor.landing_start or sim_start), 3)
-            if touchdown_time is not None and not monitor.touchdown.crashed else None,
-            "decisions": monitor.decisions,
-            "emergency_position": monitor.emergency_position,
-            "sim_time_s": round(sim_time, 3),
-            "real_time_factor": round((sim_time - sim_start) / flight_wall, 3) if flight_wall > 0 else None,
-            "touchdown": None if monitor.touchdown is None else {
-                "surface": {1: "pad", 2: "ground", 3: "vehicle"}.get(monitor.touchdown.surface, "unknown"),
-                "crashed": monitor.touchdown.crashed, "impact_speed_mps": round(monitor.touchdown.impact_speed, 3),
-                "pad_error_m": round(monitor.touchdown.pad_error, 4),
-                "resting_pad_error_m": None if monitor.resting_pad_error() is None
-                else round(monitor.resting_pad_error(), 4),
-                "position": [round(monitor.touchdown.position.x, 3), round(monitor.touchdown.position.y, 3),
-                             round(monitor.touchdown.position.z, 3)]},
-            "tracker_final_state": monitor.tracker_state,
-            "error": error,
-        })
-        monitor.rospy.signal_shutdown("scenario finished")
+            # The result needs neither the bag nor the graph any more: they stop side by side while it is
+            # scored and this process leaves the graph.
+            recorder.interrupt()
+            ros.interrupt()
+            result.update(monitor.scored(error, sim_start, sim_time, flight_wall))
+            monitor.rospy.signal_shutdown("scenario finished")
     result["wall_time_s"] = round(time.monotonic() - wall_start, 2)
+    # Where the wall time went: starting the master, graph and recorder; the flight; stopping them.
+    result["wall_phases_s"] = {"start_up": round(startup_wall, 2), "flight": round(flight_wall, 2),
+                               "shut_down": round(result["wall_time_s"] - startup_wall - flight_wall, 2)}
     result["bag"] = bag if os.path.isfile(bag) else None
     with open(os.path.join(out_dir, "result.json"), "w") as stream:
         json.dump(result, stream, indent=2)
