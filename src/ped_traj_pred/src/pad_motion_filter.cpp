@@ -168,6 +168,68 @@ MeasurementOutcome PadMotionFilter::addGps(double stamp, const Eigen::Vector2d& 
   return addFix<2>(Source::kGps, stamp, position_xy, H, params_.gps_observation_covariance, start_velocity);
 }
 
+MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, double variance)
+{
+  if (!std::isfinite(stamp) || !std::isfinite(heading) || !isPositiveFinite(variance))
+    return MeasurementOutcome::kDroppedInvalid;
+  if (!isTracking(stamp))
+    return MeasurementOutcome::kIgnored;
+  const double age = state_time_ - stamp;  // < 0: newer than the last fix, still close to it
+  if (age > kMaxHeadingAge)
+    return MeasurementOutcome::kDroppedStale;
+  const auto wrap = [](double angle) { return std::remainder(angle, 2.0 * M_PI); };
+  if (form_ == Model::Form::kCartesian)
+  {
+    Model::Vector x;
+    Model::Matrix P;
+    combine(x_, P_, mode_probabilities_, x, P);
+    if (!(Model::velocity(form_, x).norm() > kHeadingMinSpeed))
+      return MeasurementOutcome::kIgnored;
+    for (int j = 0; j < kModes; ++j)
+    {
+      if (!(Model::velocity(form_, x_[j]).norm() > 0.0))  // degenerate mode: take the combined one
+      {
+        x_[j] = x;
+        P_[j] = P;
+      }
+      Model::toPolar(x_[j], P_[j], heading, params_.initial_turn_rate_std);
+    }
+    form_ = Model::Form::kPolar;
+    onsets_.clear();
+  }
+  Model::Matrix flip = Model::Matrix::Identity();
+  flip(Model::kSpeed, Model::kSpeed) = flip(Model::kAcceleration, Model::kAcceleration) =
+      flip(Model::kCurvature, Model::kCurvature) = -1.0;
+  Eigen::Matrix<double, 1, Model::kSize> H = Eigen::Matrix<double, 1, Model::kSize>::Zero();
+  H(0, Model::kHeading) = 1.0;
+  for (int j = 0; j < kModes; ++j)
+  {
+    Model::Vector& x = x_[j];
+    Model::Matrix& P = P_[j];
+    // The heading at `stamp`: the state's, turned back by the turn rate over the age.
+    const double turn_rate = x(Model::kSpeed) * x(Model::kCurvature);
+    double innovation = wrap(heading - (x(Model::kHeading) - turn_rate * age));
+    if (std::abs(innovation) > M_PI_2)
+    {
+      x(Model::kHeading) += M_PI;
+      x = flip * x;
+      P = flip * P * flip.transpose();
+      innovation = wrap(innovation - M_PI);
+    }
+    const double turn_rate_variance = model_.turnRateVariance(form_, x, P);
+    const double R = variance + turn_rate_variance * age * age;
+    const double S = P(Model::kHeading, Model::kHeading) + R;
+    const Model::Vector K = P.col(Model::kHeading) / S;
+    const Model::Matrix I_KH = Model::Matrix::Identity() - K * H;
+    const Model::Matrix P_updated = I_KH * P * I_KH.transpose() + K * R * K.transpose();
+    x += K * innovation;
+    Model::normalise(form_, x);
+    P = 0.5 * (P_updated + P_updated.transpose());
+  }
+  updateForm();
+  return MeasurementOutcome::kAccepted;
+}
+
 template <int M>
 MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Eigen::Matrix<double, M, 1>& z,
                                            const Eigen::Matrix<double, M, Model::kSize>& H, double variance,

@@ -73,6 +73,9 @@ EvaluationResult evaluatePrediction(const SyntheticTrajectory& trajectory, const
       const Eigen::Vector2d noise(unit_normal(rng), unit_normal(rng));
       count(filter.addGps(t, truth.head<2>() + measurements.gps_noise_std * noise));
     }
+    if (measurements.use_heading && k % gps_period_samples == 0)
+      filter.addHeading(t, trajectory.heading(k) + measurements.heading_noise_std * unit_normal(rng),
+                        measurements.heading_noise_std * measurements.heading_noise_std);
     // Draw every random number whether or not the frame is used, so a blackout does not shift the
     // noise of the frames after it (runs stay comparable).
     const bool dropped = uniform(rng) < measurements.drop_probability;

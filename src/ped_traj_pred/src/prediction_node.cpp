@@ -74,6 +74,12 @@ std::string withoutLeadingSlash(const std::string& frame)
   return (!frame.empty() && frame[0] == '/') ? frame.substr(1) : frame;
 }
 
+/// Rotation about z of the quaternion `q` [rad].
+double yawOf(const geometry_msgs::Quaternion& q)
+{
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
 /// Quaternion of a rotation by `yaw` about z.
 geometry_msgs::Quaternion yawQuaternion(double yaw)
 {
@@ -182,8 +188,7 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   if (!gps_pad_offset_.isZero())
   {
     // The receiver sits at the vehicle origin; the pad centre is offset in the vehicle frame.
-    const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-    pad += Eigen::Rotation2Dd(yaw) * gps_pad_offset_;
+    pad += Eigen::Rotation2Dd(yawOf(q)) * gps_pad_offset_;
   }
   if (!pad.allFinite())
   {
@@ -199,6 +204,13 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
     velocity = reported;
   const ros::Time stamp = stampOf(msg->header);
   logOutcome(filter_.addGps(stamp.toSec(), pad, velocity, velocity_variance), gps_sub_.getTopic(), stamp);
+  // The vehicle's heading, if reported (yaw variance), holds the track's heading through stops and reversals.
+  const double yaw_variance = msg->pose.covariance[35];
+  if (std::isfinite(yaw_variance) && yaw_variance > 0.0 && yaw_variance < kUnknownVariance)
+  {
+    if (filter_.addHeading(stamp.toSec(), yawOf(q), yaw_variance) == MeasurementOutcome::kDroppedInvalid)
+      ROS_WARN_THROTTLE(5.0, "Dropping a heading with NaN or inf on %s", gps_sub_.getTopic().c_str());
+  }
 }
 
 void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp)

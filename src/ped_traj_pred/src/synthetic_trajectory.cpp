@@ -65,11 +65,13 @@ SyntheticTrajectory::SyntheticTrajectory(const TrajectorySpec& spec, double samp
   int speed_ramp = 0, yaw_ramp = 0, direction = sign(speed);  // direction: of travel, last while moving
   positions_.reserve(samples);
   velocities_.reserve(samples);
+  headings_.reserve(samples);
   for (int k = 0; k < samples; ++k)
   {
     const Eigen::Vector2d heading(std::cos(yaw), std::sin(yaw));
     positions_.emplace_back(xy.x(), xy.y(), spec.pad_height);
     velocities_.push_back(speed * heading);
+    headings_.push_back(yaw);
     for (int i = 0; i < substeps; ++i)
     {
       const Eigen::Vector2d target = command(spec, t);

@@ -175,10 +175,11 @@ class Autopilot:
         set_z = climb + p["altitude_gain"] * (self.z_ref - z)
 
         error = (set_x - vx, set_y - vy, set_z - vz)
-        # Integrate only near the set-point: the integral is for wind and drag, and integrating the
-        # large errors of a step command would make it overshoot.
+        # The integral is for wind and drag: it integrates the error clipped to +-0.5 m/s, so that a step
+        # command's large error does not wind it up. (Skipping large errors instead integrated only the
+        # small-error side of a back-and-forth: a 1.1 m/s^2 bias against the other direction.)
         limit = p["velocity_integral_limit"]
-        self.velocity_integral = [max(-limit, min(limit, i + (e * dt if abs(e) < 0.5 else 0.0)))
+        self.velocity_integral = [max(-limit, min(limit, i + max(-0.5, min(0.5, e)) * dt))
                                   for i, e in zip(self.velocity_integral, error)]
         ki = p["velocity_integral_gain"]
         accel = (p["velocity_gain"] * error[0] + ki * self.velocity_integral[0],

@@ -39,7 +39,8 @@
 // gate_threshold in every mode) is rejected; after max_consecutive_rejections in a row the track restarts
 // on the latest fix (the platform really moved, e.g. during a long blackout). GPS is fused only when
 // vision has been absent for gps_vision_timeout; a track that starts on a GPS fix starts from the
-// vehicle's reported velocity if given. Without accepted fixes the filter coasts for max_coast_time, then
+// vehicle's reported velocity if given. The heading the vehicle reports with its GPS (addHeading) holds
+// the track's heading where vision cannot tell it (at low speed, through reversals). Without accepted fixes the filter coasts for max_coast_time, then
 // reports the track lost; the next fix starts a new track.
 #pragma once
 
@@ -169,6 +170,18 @@ public:
   MeasurementOutcome addGps(double stamp, const Eigen::Vector2d& position_xy,
                             const std::optional<Eigen::Vector2d>& velocity = std::nullopt,
                             double velocity_variance = -1.0);
+
+  /// The vehicle's own heading [rad] at `stamp` [s] (the yaw its GPS/odometry reports: the axis it drives
+  /// along, whichever way it goes) with its variance [rad^2]. Vision alone cannot tell the heading of a
+  /// slow pad: after every stop or reversal its noise turned the heading (up to 2.8 rad/s of phantom turn
+  /// rate, paths bent by metres). Applied to the current state, corrected for the turn since `stamp`; a
+  /// polar track whose heading is the opposite axis flips to it (theta + pi with -s, -a, -kappa: the same
+  /// motion). A Cartesian track moving faster than kHeadingMinSpeed takes it as its heading. Not a fix:
+  /// the track is not kept alive by it. kIgnored without a track (or too slow to take it), kDroppedStale
+  /// more than kMaxHeadingAge older than the state.
+  MeasurementOutcome addHeading(double stamp, double heading, double variance);
+  static constexpr double kHeadingMinSpeed = 0.3;  ///< [m/s]
+  static constexpr double kMaxHeadingAge = 0.5;    ///< [s]
 
   /// A track exists and its last accepted fix is at most max_coast_time older than `now` [s].
   bool isTracking(double now) const;

@@ -29,6 +29,8 @@ struct MeasurementSpec
   bool use_gps = false;              ///< GPS fixes of the vehicle at gps_rate_hz
   double gps_rate_hz = 5.0;          ///< [Hz]
   double gps_noise_std = 0.3;        ///< per axis [m]
+  bool use_heading = false;          ///< the vehicle's heading (yaw) at gps_rate_hz, as its GPS/odometry reports it
+  double heading_noise_std = 0.035;  ///< [rad] (2 deg, as the simulator's vehicle_heading_std_deg)
   unsigned seed = 1;
 };
 

@@ -44,6 +44,8 @@ public:
   double sampleRate() const { return sample_rate_hz_; }
   const Eigen::Vector3d& position(int index) const { return positions_.at(index); }
   const Eigen::Vector2d& velocity(int index) const { return velocities_.at(index); }
+  /// Yaw of the vehicle [rad]: the axis it drives along (a reversal keeps it).
+  double heading(int index) const { return headings_.at(index); }
   const TrajectorySpec& spec() const { return spec_; }
   /// Instants [s] at which the motion changes character: a speed or yaw-rate ramp starts or ends, or the
   /// speed passes through zero. A filter lags most right after them.
@@ -57,6 +59,7 @@ private:
   double sample_rate_hz_;
   std::vector<Eigen::Vector3d> positions_;
   std::vector<Eigen::Vector2d> velocities_;
+  std::vector<double> headings_;
   std::vector<double> manoeuvre_times_;
 };
 

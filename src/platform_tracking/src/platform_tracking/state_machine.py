@@ -366,8 +366,9 @@ class TrackingStateMachine:
                 "ever" if inp.vision_age is None else "%.2f s" % inp.vision_age,
                 "climbing for a wider view" if height < p.retry_height else "holding the height"))
         self.blind_since_logged = not seen
-        # A vehicle that brakes or speeds up stops doing so abruptly (at rest, at its cruise speed), and a
-        # touchdown during that jolt misses: wait for it to run at a steady speed (turning is fine).
+        # A vehicle that brakes hard stops doing so abruptly (at rest), and a touchdown during that jolt
+        # misses: wait while its speed changes faster than gate_max_speed_change (turning is fine). A ramp
+        # the drone keeps up with (the Summit XL's 1 m/s^2) passes.
         steady = abs(pad.speed_change_at(t)) <= p.gate_max_speed_change
         on_target = distance < p.gate_error and relative_speed < p.gate_relative_speed and \
             inp.vision_age is not None and inp.vision_age <= p.gate_vision_age
