@@ -185,17 +185,7 @@ MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, dou
     combine(x_, P_, mode_probabilities_, x, P);
     if (!(Model::velocity(form_, x).norm() > kHeadingMinSpeed))
       return MeasurementOutcome::kIgnored;
-    for (int j = 0; j < kModes; ++j)
-    {
-      if (!(Model::velocity(form_, x_[j]).norm() > 0.0))  // degenerate mode: take the combined one
-      {
-        x_[j] = x;
-        P_[j] = P;
-      }
-      Model::toPolar(x_[j], P_[j], heading, params_.initial_turn_rate_std);
-    }
-    form_ = Model::Form::kPolar;
-    onsets_.clear();
+    enterPolarForm(x, P, heading);
   }
   Model::Matrix flip = Model::Matrix::Identity();
   flip(Model::kSpeed, Model::kSpeed) = flip(Model::kAcceleration, Model::kAcceleration) =
@@ -372,6 +362,23 @@ void PadMotionFilter::startTrack(Source source, double stamp, const Eigen::Vecto
   updateForm();
 }
 
+void PadMotionFilter::enterPolarForm(const Model::Vector& combined, const Model::Matrix& combined_covariance,
+                                     double heading)
+{
+  // Each mode keeps its own velocity, on the side of `heading` (its direction or the opposite).
+  for (int j = 0; j < kModes; ++j)
+  {
+    if (!(Model::velocity(form_, x_[j]).norm() > 0.0))  // degenerate mode: take the combined one
+    {
+      x_[j] = combined;
+      P_[j] = combined_covariance;
+    }
+    Model::toPolar(x_[j], P_[j], heading, params_.initial_turn_rate_std);
+  }
+  form_ = Model::Form::kPolar;
+  onsets_.clear();
+}
+
 void PadMotionFilter::updateForm()
 {
   Model::Vector x;
@@ -380,20 +387,8 @@ void PadMotionFilter::updateForm()
   const double heading_std = Model::headingStd(form_, x, P);
   if (form_ == Model::Form::kCartesian && heading_std <= params_.heading_acquisition_std)
   {
-    // Each mode keeps its own velocity, on the same side of the combined direction of travel.
     const Eigen::Vector2d v = Model::velocity(form_, x);
-    const double heading = std::atan2(v.y(), v.x());
-    for (int j = 0; j < kModes; ++j)
-    {
-      if (!(Model::velocity(form_, x_[j]).norm() > 0.0))  // degenerate mode: take the combined one
-      {
-        x_[j] = x;
-        P_[j] = P;
-      }
-      Model::toPolar(x_[j], P_[j], heading, params_.initial_turn_rate_std);
-    }
-    form_ = Model::Form::kPolar;
-    onsets_.clear();
+    enterPolarForm(x, P, std::atan2(v.y(), v.x()));
   }
   else if (form_ == Model::Form::kPolar && !(heading_std <= params_.heading_loss_std))
   {

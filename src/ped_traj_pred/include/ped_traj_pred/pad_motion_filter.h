@@ -246,6 +246,8 @@ private:
                   double height_variance, const StartVelocity& velocity);
   /// Acquires or gives up the heading (polar / Cartesian form) by its uncertainty.
   void updateForm();
+  /// Cartesian -> polar form, every mode with `heading` or its opposite; `combined`: the modes' mixture.
+  void enterPolarForm(const Model::Vector& combined, const Model::Matrix& combined_covariance, double heading);
   /// Opens a hypothesis of a step along `directions` right after the fix at `stamp`.
   void openOnset(double stamp, const OnsetMatrix& directions, const std::optional<Eigen::Vector2d>& known_step);
   /// Advances every onset hypothesis over a fix that updated the modes with gains K, and opens one
