@@ -121,6 +121,31 @@ def test_integral_is_frozen_while_the_pad_speeds_up_or_brakes():
     assert controller.integral == pytest.approx((0.0, 0.0))
 
 
+def corner_prediction(t0, turn_at, speed=3.0, radius=2.0):
+    """The pad along +x at ``speed`` from (0, 0) at ``t0``, turning left on a ``radius`` circle from ``turn_at``."""
+    def position(tk):
+        if tk <= turn_at:
+            return (speed * (tk - t0), 0.0, 0.5)
+        angle = speed / radius * (tk - turn_at)
+        return (speed * (turn_at - t0) + radius * math.sin(angle), radius * (1.0 - math.cos(angle)), 0.5)
+    times = [t0 + 0.1 * k for k in range(21)]
+    return PadPrediction(t0, position(t0), (speed, 0.0, 0.0), times, [position(tk) for tk in times])
+
+
+def test_integral_is_frozen_while_the_pad_turns_in():
+    """Entering a turn (the corner of a square) the error is a transient, like a braking."""
+    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0)
+    controller = TrackingController(params)
+    for k in range(10):  # the corner 0.5 s .. 0.05 s ahead, the drone 0.3 m behind the pad
+        t = k * 0.05
+        controller.world_velocity(t, drone(x=-0.3, vx=3.0), corner_prediction(t, turn_at=0.5))
+    assert controller.integral == pytest.approx((0.0, 0.0))
+    far = corner_prediction(0.0, turn_at=1.8)  # the corner 0.8 s ahead: the same error is integrated
+    controller.world_velocity(1.0, drone(x=2.7, vx=3.0), far)
+    controller.world_velocity(1.05, drone(x=2.85, vx=3.0), far)
+    assert controller.integral[0] > 0.0
+
+
 def test_the_integral_is_kept_along_and_across_the_pads_travel():
     """On a circle the drone's shortfall is steady along and across the pad's travel, not in the world."""
     params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0)

@@ -407,6 +407,20 @@ def test_touchdown_is_committed_on_a_summit_speed_ramp():
     assert f.sm.committed
 
 
+def test_touchdown_is_not_committed_into_a_stop_the_prediction_sees_coming():
+    # The Summit XL braking at 1 m/s^2 from 0.5 m/s: at rest 0.5 s later, within the final descent.
+    def stopping(t):
+        stamp = t - 0.05
+        times = [stamp + 0.1 * k for k in range(21)]
+        moving = lambda tk: min(max(tk - t, 0.0), 0.5)  # noqa: E731
+        positions = [np.array([0.5 * moving(tk) - 0.5 * moving(tk) ** 2, 0.0, PAD_Z]) for tk in times]
+        prediction = PadPrediction(stamp, positions[0], np.array([0.5, 0.0, 0.0]), times, positions)
+        return {"drone": drone(height=P.gate_height, vx=0.5), "pad": prediction}
+    f = landing_flight(height=P.gate_height)
+    f.run(1.0, make=stopping)
+    assert not f.sm.committed
+
+
 def test_touchdown_is_not_committed_while_the_relative_speed_is_large():
     f = landing_flight(height=P.gate_height)
     outs = f.run(1.0, make=fresh(x=0.02, vx=0.5, height=P.gate_height))   # pad 0.5 m/s faster than the drone

@@ -96,6 +96,21 @@ class PadPrediction:
             return 0.0
         return float(np.hypot(*v1[:2]) - np.hypot(*v0[:2])) / span
 
+    def sideways_acceleration_at(self, t, span=0.3):
+        """The pad's acceleration across its travel over the next ``span`` seconds of the path [m/s^2]
+        (speed times turn rate, left > 0); 0 where the path does not reach or the pad is slow."""
+        v0, v1 = self.path_velocity_at(t), self.path_velocity_at(t + span)
+        if v0 is None or v1 is None or min(np.hypot(*v0[:2]), np.hypot(*v1[:2])) < 0.3:
+            return 0.0
+        turn = np.arctan2(v1[1], v1[0]) - np.arctan2(v0[1], v0[0])
+        turn = (turn + np.pi) % (2.0 * np.pi) - np.pi
+        return float(0.5 * (np.hypot(*v0[:2]) + np.hypot(*v1[:2])) * turn / span)
+
+    def turn_change_at(self, t, span=0.3):
+        """How much the sideways acceleration changes from now to ``span`` seconds later [m/s^2]: large
+        on entering or leaving a turn, about 0 on a straight line or a steady circle."""
+        return self.sideways_acceleration_at(t + span, span) - self.sideways_acceleration_at(t, span)
+
     def position_at(self, t):
         """Predicted pad position at time ``t``: interpolated along the path, extrapolated with the
         velocity before its start and beyond its end."""
@@ -182,14 +197,16 @@ class TrackingController:
         dt = 0.0 if self.last_time is None else max(0.0, min(0.2, t - self.last_time))
         self.last_time = t
         # The integral is for steady deficits (drag, the drone's own velocity loop falling short at
-        # speed, on a straight line or a turn); while the pad brakes or speeds up hard the error is a
-        # transient and integrating it would only overshoot afterwards.
+        # speed, on a straight line or a steady turn); while the pad brakes, speeds up, turns in or out of
+        # a turn the error is a transient and integrating it would only overshoot afterwards (on a square
+        # at 3 m/s it kept the drone 0.3 m off the pad along every side).
         pad_velocity = self.pad_velocity(t, pad)
         if np.hypot(*pad_velocity) > 0.3:
             self.travel_heading = float(np.arctan2(pad_velocity[1], pad_velocity[0]))
         c, s = np.cos(self.travel_heading), np.sin(self.travel_heading)
         to_world = np.array([[c, -s], [s, c]])
-        steady = abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration
+        steady = abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration and \
+            abs(pad.turn_change_at(t)) <= p.integral_max_pad_acceleration
         if accumulate and steady and np.hypot(*error) < p.integral_error_limit and p.integral_gain > 0.0:
             self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)

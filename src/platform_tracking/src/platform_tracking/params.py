@@ -139,6 +139,7 @@ class TrackingParams:
     vision_timeout: float = spec(0.3, 0.01, 10.0, "s")
     gate_vision_age: float = spec(0.1, 0.0, 10.0, "s")
     gate_max_speed_change: float = spec(1.2, 0.0, 50.0, "m/s^2")
+    gate_max_speed_change_change: float = spec(0.3, 0.0, 50.0, "m/s^2")
     final_descent_rate: float = spec(1.0, 0.05, 3.0, "m/s")
     land_height: float = spec(0.12, 0.0, 5.0, "m")
     commit_abort_error: float = spec(0.2, 0.01, 5.0, "m")

@@ -366,10 +366,14 @@ class TrackingStateMachine:
                 "ever" if inp.vision_age is None else "%.2f s" % inp.vision_age,
                 "climbing for a wider view" if height < p.retry_height else "holding the height"))
         self.blind_since_logged = not seen
-        # A vehicle that brakes hard stops doing so abruptly (at rest), and a touchdown during that jolt
-        # misses: wait while its speed changes faster than gate_max_speed_change (turning is fine). A ramp
+        # A vehicle that brakes stops doing so abruptly (at rest), and a touchdown during that jolt misses:
+        # wait while its speed changes faster than gate_max_speed_change (turning is fine), or while the
+        # prediction sees that change end before the touchdown (a stop within the final descent). A ramp
         # the drone keeps up with (the Summit XL's 1 m/s^2) passes.
-        steady = abs(pad.speed_change_at(t)) <= p.gate_max_speed_change
+        speed_change = pad.speed_change_at(t)
+        descent_time = p.commit_height / p.final_descent_rate
+        steady = abs(speed_change) <= p.gate_max_speed_change and \
+            abs(pad.speed_change_at(t + descent_time) - speed_change) <= p.gate_max_speed_change_change
         on_target = distance < p.gate_error and relative_speed < p.gate_relative_speed and \
             inp.vision_age is not None and inp.vision_age <= p.gate_vision_age
         in_gate = on_target and steady
