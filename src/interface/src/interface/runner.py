@@ -129,7 +129,9 @@ class FlightMonitor:
         self._wait(ready, "the graph did not come up", time.monotonic() + timeout)
 
     def wait_for_recorder(self, timeout=60.0):
-        """Until rosbag record (interface/record.launch, part of the graph) subscribes to every needed topic."""
+        """Until rosbag record subscribes to every needed topic. It discovers topics on start-up and
+        then on a sim-time timer, which does not run while the physics is held: hence it is started
+        after the graph is up (wait_for_graph)."""
         import rosgraph
         master = rosgraph.Master("/scenario_runner")
 
@@ -249,7 +251,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     events = s["events"] if no_operator or any("operator" in e for e in s["events"]) else \
         [{"at_s": 0.0, "operator": "landing"}] + s["events"]
     launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
-              "supervisor:=%s" % str(s["_supervisor"]).lower(), "record:=true", "bag:=" + bag] + launch_arguments(s)
+              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s)
     wall_start = time.monotonic()
     wall_timeout = wall_timeout or max(300.0, 4.0 * s["time_limit_s"])
     result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path)}
@@ -258,23 +260,27 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
         ros.wait_for_master()
         monitor = FlightMonitor(s, wall_timeout)
         monitor.wait_for_graph()
-        monitor.wait_for_recorder()
-        monitor.release()
-        sim_start = monitor.rospy.get_time()
-        wall_flight_start = time.monotonic()
-        startup_wall = wall_flight_start - wall_start
-        try:
-            monitor.run(EventSchedule(events), s["time_limit_s"])
-            error = None
-        except TimeoutError as err:
-            error = str(err)
-        sim_time = monitor.rospy.get_time()
-        flight_wall = time.monotonic() - wall_flight_start
-        # The result needs neither the bag nor the graph any more: they stop (the bag is closed) while it
-        # is scored and this process leaves the graph.
-        ros.interrupt()
-        result.update(monitor.scored(error, sim_start, sim_time, flight_wall))
-        monitor.rospy.signal_shutdown("scenario finished")
+        recorder = IsolatedLaunch(["interface", "record.launch", "bag:=" + bag],
+                                  os.path.join(out_dir, "recorder.log"), port=ros.port)
+        with recorder:
+            monitor.wait_for_recorder()
+            monitor.release()
+            sim_start = monitor.rospy.get_time()
+            wall_flight_start = time.monotonic()
+            startup_wall = wall_flight_start - wall_start
+            try:
+                monitor.run(EventSchedule(events), s["time_limit_s"])
+                error = None
+            except TimeoutError as err:
+                error = str(err)
+            sim_time = monitor.rospy.get_time()
+            flight_wall = time.monotonic() - wall_flight_start
+            # The result needs neither the bag nor the graph any more: they stop side by side while it is
+            # scored and this process leaves the graph.
+            recorder.interrupt()
+            ros.interrupt()
+            result.update(monitor.scored(error, sim_start, sim_time, flight_wall))
+            monitor.rospy.signal_shutdown("scenario finished")
     result["wall_time_s"] = round(time.monotonic() - wall_start, 2)
     # Where the wall time went: starting the master, graph and recorder; the flight; stopping them.
     result["wall_phases_s"] = {"start_up": round(startup_wall, 2), "flight": round(flight_wall, 2),

@@ -13,6 +13,7 @@ import json
 import sys
 import threading
 
+import rosgraph
 import rospy
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Navdata
@@ -168,9 +169,11 @@ class SupervisorNode:
     @staticmethod
     def _read_param(name, cached=True):
         try:
-            # Cached: pushed by the master, no XML-RPC round trip per poll.
-            return rospy.get_param_cached("/" + name) if cached else rospy.get_param("/" + name)
-        except KeyError:
+            if cached:  # pushed by the master, no XML-RPC round trip per poll
+                return rospy.get_param_cached("/" + name)
+            # Not rospy.get_param: once a key is cached, it answers from the cache too.
+            return rosgraph.Master(rospy.get_name()).getParam("/" + name)
+        except (KeyError, rosgraph.MasterException):
             return MISSING
 
     def _readings(self, t):

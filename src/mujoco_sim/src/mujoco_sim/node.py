@@ -10,6 +10,7 @@ import sys
 import threading
 import time
 
+import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
@@ -320,6 +321,11 @@ class SimNode:
                 continue  # our own mirror, not an operator's change
             if raw == self.rejected.get(name, _NOTHING):
                 continue  # already warned; the bad value stays visible to the supervisor (unsafe case)
+            if name == "drone_battery" and _master_param("/drone_battery") == self.battery_written:
+                # An operator's value, but the master holds our mirror: it was written over between the
+                # mirror's check and its write (the parameter server has no compare-and-set). Put it back:
+                # the supervisor must see it.
+                rospy.set_param("/drone_battery", raw)
             if raw != self.conditions[name]:
                 value = self._checked_condition(name, raw, self.conditions[name])
                 if value != self.conditions[name]:
@@ -340,7 +346,7 @@ class SimNode:
         if level != self.battery_written and "drone_battery" not in self.rejected:
             # The cache may not hold an operator's value set a moment ago: ask the master itself, so the
             # mirror never overwrites it (the next poll then reads it as an operator's change).
-            if rospy.get_param("/drone_battery", None) == self.battery_written:
+            if _master_param("/drone_battery") == self.battery_written:
                 rospy.set_param("/drone_battery", level)
                 self.battery_written = level
 
@@ -476,6 +482,15 @@ class SimNode:
         _fill_vector(msg.transform.translation, position)
         _quaternion_msg(msg.transform.rotation, quat_wxyz)
         return msg
+
+
+def _master_param(key):
+    """``key``'s value on the master, or None. (rospy.get_param answers from rospy's cache once the key is
+    cached by get_param_cached, which may lag behind the master.)"""
+    try:
+        return rosgraph.Master(rospy.get_name()).getParam(key)
+    except rosgraph.MasterException:
+        return None
 
 
 def _fill_vector(target, values):
