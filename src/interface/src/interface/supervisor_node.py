@@ -16,6 +16,7 @@ import threading
 import rosgraph
 import rospy
 from landing_msgs.lockstep import LockstepAcker
+from landing_msgs.shutdown import shutdown_on_signals
 from landing_msgs.msg import Navdata
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
@@ -235,7 +236,8 @@ class SupervisorNode:
 
 
 def main():
-    rospy.init_node("supervisor")
+    rospy.init_node("supervisor", disable_signals=True)
+    shutdown_on_signals()  # rospy's handler deadlocked once mid-publish (see landing_msgs.shutdown)
     try:
         node = SupervisorNode()
     except StartupError as err:

@@ -43,11 +43,12 @@ class IsolatedLaunch:
         env = dict(os.environ, ROS_MASTER_URI=self.master_uri, ROS_HOSTNAME="127.0.0.1")
         env.pop("ROS_IP", None)
         self._log = open(self.log_path, "w")
-        # A node exits within about a second of SIGINT. Now and then the simulator does not (seen 1 run in
-        # 10, not yet explained) and roslaunch's default would wait 15 s, then 2 s more after SIGTERM.
-        self.process = subprocess.Popen(["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3",
-                                         "--sigterm-timeout=1"] + self.launch_args, env=env, stdout=self._log, stderr=subprocess.STDOUT,
-                                        stdin=subprocess.DEVNULL, start_new_session=True)
+        # A node exits within about a second of SIGINT. One that hangs (rospy runs its shutdown inside the
+        # signal handler and can deadlock on a lock the interrupted thread holds: the simulator did, 1 run
+        # in 10, before it handled the signal itself) would cost roslaunch's default 15 s + 2 s.
+        command = ["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3", "--sigterm-timeout=1"]
+        self.process = subprocess.Popen(command + self.launch_args, env=env, stdout=self._log,
+                                        stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
         return self
 
     def wait_for_master(self, timeout=60.0):

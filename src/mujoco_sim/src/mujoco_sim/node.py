@@ -5,7 +5,6 @@ All stamps are sim time computed here (this node is the clock source), so it nev
 import json
 import math
 import queue
-import signal
 import sys
 import threading
 import time
@@ -15,6 +14,7 @@ import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
+from landing_msgs.shutdown import shutdown_on_signals
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
@@ -68,7 +68,6 @@ class SimNode:
         # A scenario runner starts the physics only once the whole graph (recorder included) listens.
         self.wait_for_start = bool(private.pop("wait_for_start", False))
         self.started = threading.Event()
-        self.stop_requested = threading.Event()  # set by SIGINT / SIGTERM (see main)
         self.cfg = validate_sim_config(private, "sim_node private parameters (%s)" % rospy.get_name())
         self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
@@ -197,7 +196,7 @@ class SimNode:
         # Hold the clock at 1 ms, not 0: nodes such as rosbag record wait for a non-zero time before
         # they subscribe. The first physics step is 4 ms, so time never runs backwards.
         waiting_clock = Clock(clock=rospy.Time.from_sec(self.sim.time + 0.001))
-        while self.wait_for_start and not self.started.is_set() and self._running():
+        while self.wait_for_start and not self.started.is_set() and not rospy.is_shutdown():
             self.pub_clock.publish(waiting_clock)
             self.started.wait(0.1)
 
@@ -209,7 +208,7 @@ class SimNode:
         rospy.loginfo("simulating %s (seed %d) at %s", self.model_file, self.cfg["seed"],
                       "%gx real time" % rtf if rtf > 0 else "full speed")
         self.wall_start, self.sim_start = wall_start, sim_start
-        while self._running():
+        while not rospy.is_shutdown():
             while not self.actions.empty():
                 self.actions.get()()
             if self.lockstep is not None:
@@ -231,9 +230,6 @@ class SimNode:
                 break
         self.sim.close()
 
-    def _running(self):
-        return not rospy.is_shutdown() and not self.stop_requested.is_set()
-
     def _wait_for_lagging_nodes(self):
         """Lock-step: hold sim time while a node that acknowledges its work lags too far behind."""
         next_time = self.sim.time + self.sim.dt
@@ -241,7 +237,7 @@ class SimNode:
         if blocker is None:
             return
         t0 = time.perf_counter()
-        while blocker is not None and self._running():
+        while blocker is not None and not rospy.is_shutdown():
             self.lockstep.acknowledged.clear()
             self.lockstep.acknowledged.wait(0.005)
             blocker = self.lockstep.blocker(next_time, time.monotonic())
@@ -526,17 +522,12 @@ def _stop_listening_to_own_clock():
 def main():
     import warnings
     warnings.filterwarnings("ignore", message=".*queue_size.*")  # synchronous publishing is on purpose
-    # rospy's own SIGINT handler runs its whole shutdown inside the handler, in the middle of whatever the
-    # main thread was doing: in the middle of publishing a camera frame it deadlocked on the queued
-    # connection's lock (1 run in 10; roslaunch had to SIGKILL it). Here the handler only stops the loop.
     rospy.init_node("mujoco_sim", disable_signals=True)
+    shutdown_on_signals()  # rospy's handler deadlocked here mid-publish (see landing_msgs.shutdown)
     _stop_listening_to_own_clock()
     try:
         node = SimNode()
     except ConfigError as err:
         rospy.logfatal("mujoco_sim cannot start: %s", err)
         sys.exit(2)
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: node.stop_requested.set())
     node.spin()
-    rospy.signal_shutdown("stopped")

@@ -40,8 +40,8 @@
 // on the latest fix (the platform really moved, e.g. during a long blackout). GPS is fused only when
 // vision has been absent for gps_vision_timeout; a track that starts on a GPS fix starts from the
 // vehicle's reported velocity if given. The heading the vehicle reports with its GPS (addHeading) holds
-// the track's heading where vision cannot tell it (at low speed, through reversals). Without accepted fixes the filter coasts for max_coast_time, then
-// reports the track lost; the next fix starts a new track.
+// the track's heading where vision cannot tell it (at low speed, through reversals). Without accepted
+// fixes the filter coasts for max_coast_time, then reports the track lost; the next fix starts a new track.
 #pragma once
 
 #include "ped_traj_pred/turn_acceleration_model.h"
