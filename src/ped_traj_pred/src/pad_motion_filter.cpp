@@ -205,6 +205,7 @@ MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, dou
       x = flip * x;
       P = flip * P * flip.transpose();
       innovation = wrap(innovation - M_PI);
+      onsets_.clear();  // their sensitivities are in the old representation
     }
     const double turn_rate_variance = model_.turnRateVariance(form_, x, P);
     const double R = variance + turn_rate_variance * age * age;
