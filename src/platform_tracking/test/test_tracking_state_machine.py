@@ -378,14 +378,21 @@ def test_touchdown_is_not_committed_without_a_fresh_detection():
     assert not f.sm.committed
 
 
-def test_touchdown_waits_while_the_pad_brakes_hard_without_timing_out():
-    def braking(t):
+def at_the_gate_along_x(x_after, speed_at_stamp, drone_speed):
+    """``make(t)`` for Flight.run: the pad ``x_after(dt)`` along x ``dt`` s after t on a prediction stamped
+    0.05 s before t, the drone above it at the gate height, flying at ``drone_speed``."""
+    def make(t):
         stamp = t - 0.05
         times = [stamp + 0.1 * k for k in range(21)]
-        # A car braking at 3 m/s^2 from 6 m/s, the drone on the pad's current position and speed
-        positions = [np.array([6.0 * (tk - t) - 1.5 * (tk - t) ** 2, 0.0, PAD_Z]) for tk in times]
-        prediction = PadPrediction(stamp, positions[0], np.array([6.15, 0.0, 0.0]), times, positions)
-        return {"drone": drone(height=P.gate_height, vx=6.0), "pad": prediction}
+        positions = [np.array([x_after(tk - t), 0.0, PAD_Z]) for tk in times]
+        prediction = PadPrediction(stamp, positions[0], np.array([speed_at_stamp, 0.0, 0.0]), times, positions)
+        return {"drone": drone(height=P.gate_height, vx=drone_speed), "pad": prediction}
+    return make
+
+
+def test_touchdown_waits_while_the_pad_brakes_hard_without_timing_out():
+    # A car braking at 3 m/s^2 from 6 m/s, the drone on the pad's current position and speed
+    braking = at_the_gate_along_x(lambda dt: 6.0 * dt - 1.5 * dt ** 2, 6.15, 6.0)
     f = landing_flight(height=P.gate_height)
     f.run(P.gate_timeout + 1.0, make=braking)
     assert not f.sm.committed and not f.sm.retrying   # waiting, not giving up
@@ -396,12 +403,7 @@ def test_touchdown_waits_while_the_pad_brakes_hard_without_timing_out():
 def test_touchdown_is_committed_on_a_summit_speed_ramp():
     # The Summit XL speeding up at 1 m/s^2 (back and forth at 3 m/s never runs at a steady speed), the
     # drone keeping up with it: inside the gate.
-    def ramp(t):
-        stamp = t - 0.05
-        times = [stamp + 0.1 * k for k in range(21)]
-        positions = [np.array([1.0 * (tk - t) + 0.5 * (tk - t) ** 2, 0.0, PAD_Z]) for tk in times]
-        prediction = PadPrediction(stamp, positions[0], np.array([0.95, 0.0, 0.0]), times, positions)
-        return {"drone": drone(height=P.gate_height, vx=1.0), "pad": prediction}
+    ramp = at_the_gate_along_x(lambda dt: 1.0 * dt + 0.5 * dt ** 2, 0.95, 1.0)
     f = landing_flight(height=P.gate_height)
     f.run(P.gate_ready_time + 0.1, make=ramp)
     assert f.sm.committed
@@ -409,13 +411,8 @@ def test_touchdown_is_committed_on_a_summit_speed_ramp():
 
 def test_touchdown_is_not_committed_into_a_stop_the_prediction_sees_coming():
     # The Summit XL braking at 1 m/s^2 from 0.5 m/s: at rest 0.5 s later, within the final descent.
-    def stopping(t):
-        stamp = t - 0.05
-        times = [stamp + 0.1 * k for k in range(21)]
-        moving = lambda tk: min(max(tk - t, 0.0), 0.5)  # noqa: E731
-        positions = [np.array([0.5 * moving(tk) - 0.5 * moving(tk) ** 2, 0.0, PAD_Z]) for tk in times]
-        prediction = PadPrediction(stamp, positions[0], np.array([0.5, 0.0, 0.0]), times, positions)
-        return {"drone": drone(height=P.gate_height, vx=0.5), "pad": prediction}
+    moving = lambda dt: min(max(dt, 0.0), 0.5)  # noqa: E731
+    stopping = at_the_gate_along_x(lambda dt: 0.5 * moving(dt) - 0.5 * moving(dt) ** 2, 0.5, 0.5)
     f = landing_flight(height=P.gate_height)
     f.run(1.0, make=stopping)
     assert not f.sm.committed
