@@ -177,7 +177,6 @@ MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, dou
   const double age = state_time_ - stamp;  // < 0: newer than the last fix, still close to it
   if (age > kMaxHeadingAge)
     return MeasurementOutcome::kDroppedStale;
-  const auto wrap = [](double angle) { return std::remainder(angle, 2.0 * M_PI); };
   if (form_ == Model::Form::kCartesian)
   {
     Model::Vector x;
@@ -198,13 +197,13 @@ MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, dou
     Model::Matrix& P = P_[j];
     // The heading at `stamp`: the state's, turned back by the turn rate over the age.
     const double turn_rate = x(Model::kSpeed) * x(Model::kCurvature);
-    double innovation = wrap(heading - (x(Model::kHeading) - turn_rate * age));
+    double innovation = Model::wrapAngle(heading - (x(Model::kHeading) - turn_rate * age));
     if (std::abs(innovation) > M_PI_2)
     {
       x(Model::kHeading) += M_PI;
       x = flip * x;
       P = flip * P * flip.transpose();
-      innovation = wrap(innovation - M_PI);
+      innovation = Model::wrapAngle(innovation - M_PI);
       onsets_.clear();  // their sensitivities are in the old representation
     }
     const double turn_rate_variance = model_.turnRateVariance(form_, x, P);

@@ -15,11 +15,6 @@ int subSteps(double dt, double max_step)
   return std::max(1, static_cast<int>(std::ceil(std::abs(dt) / max_step)));
 }
 
-double wrapAngle(double angle)
-{
-  return angle - 2.0 * M_PI * std::floor((angle + M_PI) / (2.0 * M_PI));
-}
-
 Eigen::Vector2d unit(double angle)
 {
   return { std::cos(angle), std::sin(angle) };
@@ -31,6 +26,11 @@ Eigen::Vector2d left(const Eigen::Vector2d& v)
   return { -v.y(), v.x() };
 }
 }  // namespace
+
+double TurnAccelerationModel::wrapAngle(double angle)
+{
+  return angle - 2.0 * M_PI * std::floor((angle + M_PI) / (2.0 * M_PI));
+}
 
 TurnAccelerationModel::TurnAccelerationModel(double low_speed_regularisation, double max_step)
   : eps_(low_speed_regularisation), max_step_(max_step)

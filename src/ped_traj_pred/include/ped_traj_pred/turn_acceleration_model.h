@@ -79,6 +79,8 @@ public:
   static Vector difference(Form form, const Vector& a, const Vector& b);
   /// Wraps the heading to [-pi, pi).
   static void normalise(Form form, Vector& x);
+  /// `angle` wrapped to [-pi, pi) [rad].
+  static double wrapAngle(double angle);
 
   /// Horizontal velocity [m/s] and its covariance [m^2/s^2].
   static Eigen::Vector2d velocity(Form form, const Vector& x);
