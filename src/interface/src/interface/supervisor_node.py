@@ -31,7 +31,7 @@ from .supervisor_measures import (PlatformSpeed, SensorWatchdog, TargetLostTimer
 SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/camera_info", "imu_silence_s": "ardrone/imu",
                  "odometry_silence_s": "ardrone/gps/odom", "sonar_silence_s": "ardrone/sonar_height"}
 SERVICES = ("landing", "emergency", "manual", "continue")
-PARAM_VERIFY_PERIOD_S = 1.0  # how often the condition parameters are read from the master, not the cache [s]
+PARAM_VERIFY_PERIOD_S = 1.0  # how often the condition parameters are re-read (uncached: see _read_param) [s]
 NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
     "rate_hz": (5.0, 200.0),
     "platform_odom_timeout_s": (0.05, 60.0),
