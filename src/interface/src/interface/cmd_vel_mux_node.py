@@ -5,6 +5,7 @@ import sys
 import rospy
 from geometry_msgs.msg import Twist
 from landing_msgs.lockstep import LockstepAcker
+from landing_msgs.rospy_node import init_node
 from std_msgs.msg import String
 
 from .cmd_vel_mux import CommandSelector
@@ -68,7 +69,7 @@ class MuxNode:
 
 
 def main():
-    rospy.init_node("cmd_vel_mux")
+    init_node("cmd_vel_mux")
     try:
         node = MuxNode()
     except ValueError as err:

@@ -12,6 +12,7 @@ import rospy
 from geometry_msgs.msg import PointStamped, Twist
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
+from landing_msgs.rospy_node import init_node
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 from std_msgs.msg import Empty, String
@@ -138,7 +139,7 @@ class EmergencyNode:
 
 
 def main():
-    rospy.init_node("emergency")
+    init_node("emergency")
     try:
         node = EmergencyNode()
     except SettingsError as err:

@@ -15,8 +15,8 @@ import threading
 
 import rospy
 from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.shutdown import shutdown_on_signals
 from landing_msgs.msg import Navdata
+from landing_msgs.rospy_node import init_node
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger, TriggerResponse
@@ -235,8 +235,7 @@ class SupervisorNode:
 
 
 def main():
-    rospy.init_node("supervisor", disable_signals=True)
-    shutdown_on_signals()  # rospy's handler deadlocked once mid-publish (see landing_msgs.shutdown)
+    init_node("supervisor")
     try:
         node = SupervisorNode()
     except StartupError as err:

@@ -28,7 +28,8 @@ def main():
     import rospy
     from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import Path
-    rospy.init_node("trails")
+    from landing_msgs.rospy_node import init_node, spin
+    init_node("trails")
     try:
         seconds, spacing = float(rospy.get_param("~seconds")), float(rospy.get_param("~spacing"))
     except KeyError as err:
@@ -51,4 +52,4 @@ def main():
                     path.poses.append(pose)
                 publisher.publish(path)
         rospy.Subscriber(source, PoseStamped, on_pose, queue_size=5)
-    rospy.spin()
+    spin()

@@ -14,7 +14,7 @@ import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
-from landing_msgs.shutdown import shutdown_on_signals
+from landing_msgs.rospy_node import init_node
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
@@ -522,8 +522,7 @@ def _stop_listening_to_own_clock():
 def main():
     import warnings
     warnings.filterwarnings("ignore", message=".*queue_size.*")  # synchronous publishing is on purpose
-    rospy.init_node("mujoco_sim", disable_signals=True)
-    shutdown_on_signals()  # rospy's handler deadlocked here mid-publish (see landing_msgs.shutdown)
+    init_node("mujoco_sim")  # rospy's own signal handler deadlocked here mid-publish (see landing_msgs.shutdown)
     _stop_listening_to_own_clock()
     try:
         node = SimNode()

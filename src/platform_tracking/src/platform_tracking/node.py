@@ -32,6 +32,7 @@ import rospy
 from geometry_msgs.msg import PointStamped, Twist
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
+from landing_msgs.rospy_node import init_node, spin
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, String
@@ -175,9 +176,9 @@ class EstimatorNode:
 
 
 def estimator_main():
-    rospy.init_node("drone_estimator")
+    init_node("drone_estimator")
     EstimatorNode()
-    rospy.spin()
+    spin()
 
 
 # ------------------------------------------------------------------------------------------------
@@ -382,5 +383,5 @@ class TrackingNode:
 
 
 def tracking_main():
-    rospy.init_node("platform_tracking")
+    init_node("platform_tracking")
     TrackingNode().spin()

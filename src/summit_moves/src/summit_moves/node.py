@@ -4,6 +4,7 @@ import sys
 import rospy
 from geometry_msgs.msg import Twist
 from landing_msgs.lockstep import LockstepAcker
+from landing_msgs.rospy_node import init_node
 from std_msgs.msg import Empty
 
 from .paths import Path, PathError
@@ -17,7 +18,7 @@ def _required(name):
 
 
 def main():
-    rospy.init_node("summit_moves")
+    init_node("summit_moves")
     try:
         path = Path(_required("~path"), float(_required("~speed")), float(_required("~radius")), int(_required("~seed")))
     except (PathError, ValueError, TypeError) as err:

@@ -1,0 +1,60 @@
+"""Start and stop of this workspace's rospy nodes, with three of rospy's defaults mended.
+
+    from landing_msgs.rospy_node import init_node, spin
+    init_node("name")   # instead of rospy.init_node("name")
+    ...
+    spin()              # instead of rospy.spin()
+
+- Signals: rospy's handler can deadlock mid-publish (see landing_msgs.shutdown); here a signal starts a
+  thread that shuts rospy down.
+- Accept backlog: rospy's TCPROS server listens with a backlog of 5 and accepts in one thread. When a
+  node subscribes to 20 of a publisher's topics at once (rosbag record does), the kernel drops the
+  surplus connection requests and the client retries them after 1 s: the bag then missed the first
+  seconds of ground truth and navdata (6 sim-seconds at 6x real time).
+- Prompt exit: rospy.spin() looks for the shutdown every 0.5 s and a sleep on sim time every 0.3 s
+  once the clock has stopped; here both wake up as soon as rospy shuts down.
+"""
+import threading
+
+import rospy
+
+from landing_msgs.shutdown import shutdown_on_signals
+
+ACCEPT_BACKLOG = 128  # pending inbound connections the kernel keeps for the TCPROS server [-]
+
+
+def init_node(name, **kwargs):
+    """rospy.init_node(name, **kwargs) and the three mends above (call from the main thread)."""
+    rospy.init_node(name, disable_signals=True, **kwargs)
+    shutdown_on_signals()
+    _after_shutdown_flag(_wake_sleepers)
+    widen_accept_backlog()
+
+
+def widen_accept_backlog(backlog=ACCEPT_BACKLOG):
+    """Listen again on rospy's TCPROS server socket with a longer backlog (Linux updates it in place)."""
+    from rospy.impl import tcpros_base
+    server = tcpros_base.init_tcpros_server()  # the node's server; created by init_node
+    server.start_server()  # a no-op once started
+    server.tcp_ros_server.server_sock.listen(backlog)
+
+
+def _after_shutdown_flag(callback):
+    """Call ``callback()`` once rospy.is_shutdown() is true: rospy.on_shutdown hooks run before that, so
+    a loop they wake would see no shutdown and go back to sleep."""
+    rospy.core.add_shutdown_hook(lambda _reason: callback())
+
+
+def _wake_sleepers():
+    """rospy.sleep and Rate.sleep wait on the sim-time condition: wake them so they see the shutdown."""
+    condition = rospy.rostime.get_rostime_cond()
+    with condition:
+        condition.notify_all()
+
+
+def spin():
+    """Block until rospy shuts down; returns at once when it does."""
+    stopped = threading.Event()
+    _after_shutdown_flag(stopped.set)
+    while not rospy.is_shutdown():
+        stopped.wait(1.0)

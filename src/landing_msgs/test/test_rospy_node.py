@@ -1,0 +1,65 @@
+"""landing_msgs.rospy_node against a real master: the node accepts a burst of connections while its accept
+thread is stuck, and SIGINT ends spin() and a sleep on a sim clock that has stopped."""
+import signal
+import socket
+import subprocess
+import sys
+
+NODE = """
+import rospy
+from std_msgs.msg import String
+from rospy.impl import tcpros_base
+from landing_msgs.rospy_node import init_node, spin
+init_node("burst_listener")
+rospy.Publisher("chatter", String, queue_size=1)
+print("port %d" % tcpros_base.init_tcpros_server().get_address()[1], flush=True)
+{wait}
+print("returned", flush=True)
+"""
+SPIN = NODE.format(wait="spin()")
+# /use_sim_time is set and nobody publishes /clock: time stands still, as after the simulator exits.
+SIM_TIME_SLEEP = NODE.format(wait="""
+try:
+    rospy.Rate(10).sleep()
+except rospy.ROSInterruptException:
+    pass""")
+
+
+def start(code, env):
+    node = subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    line = node.stdout.readline()
+    assert line.startswith("port "), "the node did not start: %r" % line
+    return node, int(line.split()[1])
+
+
+def stop(node):
+    node.send_signal(signal.SIGINT)
+    out, _ = node.communicate(timeout=30)
+    return node.returncode, out
+
+
+def test_a_burst_of_connections_is_accepted_while_the_accept_thread_waits_for_a_header(ros_master):
+    _, env = ros_master
+    node, port = start(SPIN, env)
+    sockets = []
+    try:
+        # rospy reads each connection's header in its one accept thread: a client that sends none holds
+        # it, and every later connection waits in the kernel's backlog (rospy's own: 5).
+        sockets.append(socket.create_connection(("127.0.0.1", port), timeout=10))
+        for _ in range(30):
+            sockets.append(socket.create_connection(("127.0.0.1", port), timeout=10))
+    finally:
+        for s in sockets:
+            s.close()
+        code, out = stop(node)
+    assert len(sockets) == 31
+    assert code == 0 and "returned" in out
+
+
+def test_sigint_ends_a_sleep_on_a_stopped_sim_clock(ros_master):
+    proxy, env = ros_master
+    proxy.setParam("/use_sim_time", True)
+    node, _ = start(SIM_TIME_SLEEP, env)
+    code, out = stop(node)
+    assert code == 0 and "returned" in out
