@@ -11,7 +11,7 @@ import sys
 import threading
 import time
 
-from mujoco_sim.isolated_ros import IsolatedLaunch
+from mujoco_sim.isolated_ros import IsolatedLaunch, graph_unconnected
 
 from . import scenario as scenario_mod
 from . import scoring
@@ -111,6 +111,13 @@ class FlightMonitor:
                   "/summit_xl/gps/odom", "/tf"]
         return needed + (["/platform_tracking/state"] if self.s.get("_needs_tracker") else [])
 
+    def _outputs_of_every_node(self):
+        """One topic each node of the landing stack advertises when it starts: once all are advertised,
+        every node is up and has subscribed to its inputs (the nodes subscribe as they advertise)."""
+        stack = ["/ardrone/odom_estimate", "/kalman_prediction_path", "/platform/current_platform_position_in_world"] \
+            if self.s.get("_needs_tracker") else []
+        return stack + (["/supervisor/mode", "/emergency/state", "/cmd_vel_mux/selected"] if self.s.get("_supervisor") else [])
+
     def _wait(self, condition, what, deadline):
         while not condition():
             if time.monotonic() > deadline:
@@ -124,7 +131,7 @@ class FlightMonitor:
 
         def ready():
             advertised = {topic for topic, _ in master.getSystemState()[0]}
-            return all(t in advertised for t in self._needed_topics()) and \
+            return all(t in advertised for t in self._needed_topics() + self._outputs_of_every_node()) and \
                 (not self.s.get("_needs_tracker") or self.tracker_state is not None)
         self._wait(ready, "the graph did not come up", time.monotonic() + timeout)
 
@@ -139,6 +146,24 @@ class FlightMonitor:
             subscribers = {topic: nodes for topic, nodes in master.getSystemState()[1]}
             return all("/flight_recorder" in subscribers.get(t, []) for t in self._needed_topics())
         self._wait(ready, "the flight recorder did not subscribe", time.monotonic() + timeout)
+
+    def wait_for_connections(self, timeout=120.0):
+        """Until every subscription in the graph is connected to its publishers. The simulator's
+        lock-step only waits for nodes that have acknowledged once: a node whose inputs were still
+        connecting at the start fell seconds behind (the supervisor then saw 'odometry missing' for 5 s
+        and refused the take-off, 1 run in 100)."""
+        import rosgraph
+        master = rosgraph.Master("/scenario_runner")
+        missing = []
+
+        def connected():
+            missing[:] = graph_unconnected(master)
+            return not missing
+        try:
+            self._wait(connected, "the graph did not connect", time.monotonic() + timeout)
+        except TimeoutError as err:
+            raise TimeoutError("%s; %d subscriptions never connected, e.g. %s" % (
+                err, len(missing), ", ".join("%s from %s to %s" % m for m in missing[:3])))
 
     def release(self, timeout=120.0):
         """Start the simulator's physics and wait for the clock to run."""
@@ -264,6 +289,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
                                   os.path.join(out_dir, "recorder.log"), port=ros.port)
         with recorder:
             monitor.wait_for_recorder()
+            monitor.wait_for_connections()
             monitor.release()
             sim_start = monitor.rospy.get_time()
             wall_flight_start = time.monotonic()

@@ -5,6 +5,7 @@ import signal
 import socket
 import subprocess
 import time
+import xmlrpc.client
 
 
 def free_port(low=20000):
@@ -25,6 +26,49 @@ def free_port(low=20000):
                 continue
         return port
     raise RuntimeError("no free TCP port in %d-%d for a ROS master" % (low, high))
+
+
+def unconnected_subscriptions(system_state, outbound):
+    """(topic, publisher, subscriber) for each subscription the master lists whose publisher has not
+    connected to the subscriber yet. ``system_state``: the master's getSystemState() (publishers,
+    subscribers, services); ``outbound``: {publisher node: {(topic, subscriber node), ...}}, the
+    connections each publisher reports (getBusInfo)."""
+    publishers = dict(system_state[0])
+    missing = []
+    for topic, subscribers in system_state[1]:
+        for publisher in publishers.get(topic, []):
+            connected = outbound.get(publisher, set())
+            missing.extend((topic, publisher, s) for s in subscribers if (topic, s) not in connected)
+    return missing
+
+
+class _TimeoutTransport(xmlrpc.client.Transport):
+    """XML-RPC over HTTP with a socket timeout: a node that hangs must not hang its caller."""
+
+    def __init__(self, timeout):
+        super().__init__()
+        self.timeout = timeout
+
+    def make_connection(self, host):
+        connection = super().make_connection(host)
+        connection.timeout = self.timeout
+        return connection
+
+
+def graph_unconnected(master, timeout=2.0):
+    """unconnected_subscriptions() of the graph behind ``master`` (a rosgraph.Master), asking every
+    publishing node for its connections. A node that does not answer counts as connected to nobody."""
+    state = master.getSystemState()
+    outbound = {}
+    for node in {n for _, nodes in state[0] for n in nodes}:
+        try:
+            api = xmlrpc.client.ServerProxy(master.lookupNode(node), transport=_TimeoutTransport(timeout))
+            _, _, connections = api.getBusInfo("/graph_check")
+        except Exception:  # gone or not answering yet: checked again on the next poll
+            continue
+        # Entries: (id, destination, direction, transport, topic, ...); a publisher's are outbound ('o').
+        outbound[node] = {(c[4], c[1]) for c in connections if c[2] in ("o", "b")}
+    return unconnected_subscriptions(state, outbound)
 
 
 class IsolatedLaunch:

@@ -1,0 +1,65 @@
+"""The graph-connection check run_scenario waits on before it starts the physics: the pure part, and the
+same check against a real master with a publisher that connects late."""
+import subprocess
+import sys
+import time
+
+from mujoco_sim.isolated_ros import graph_unconnected, unconnected_subscriptions
+
+STATE = ([("/clock", ["/sim"]), ("/cmd", ["/tracker", "/joystick"])],
+         [("/clock", ["/tracker", "/rec"]), ("/cmd", ["/sim"]), ("/nobody_publishes", ["/rec"])], [])
+
+
+def test_every_subscription_connected_to_every_publisher_is_nothing_missing():
+    outbound = {"/sim": {("/clock", "/tracker"), ("/clock", "/rec")},
+                "/tracker": {("/cmd", "/sim")}, "/joystick": {("/cmd", "/sim")}}
+    assert unconnected_subscriptions(STATE, outbound) == []
+
+
+def test_a_subscriber_not_yet_connected_to_one_of_two_publishers_is_missing():
+    outbound = {"/sim": {("/clock", "/tracker"), ("/clock", "/rec")}, "/tracker": {("/cmd", "/sim")}}
+    assert unconnected_subscriptions(STATE, outbound) == [("/cmd", "/joystick", "/sim")]
+
+
+def test_a_publisher_that_did_not_answer_counts_as_connected_to_nobody():
+    outbound = {"/tracker": {("/cmd", "/sim")}, "/joystick": {("/cmd", "/sim")}}
+    assert sorted(unconnected_subscriptions(STATE, outbound)) == [("/clock", "/sim", "/rec"),
+                                                                  ("/clock", "/sim", "/tracker")]
+
+
+NODE = """
+import rospy
+from std_msgs.msg import String
+rospy.init_node("%s")
+%s
+rospy.spin()
+"""
+TALKER = NODE % ("late_talker", 'publisher = rospy.Publisher("chatter", String, queue_size=1)')
+LISTENER = NODE % ("listener", 'rospy.Subscriber("chatter", String, lambda m: None)')
+
+
+def test_a_real_subscriber_is_missing_until_the_publisher_connected_it(ros_master):
+    proxy, env = ros_master
+    talker = subprocess.Popen([sys.executable, "-c", TALKER], env=env, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        while "/chatter" not in {t for t, _ in proxy.getSystemState()[0]}:
+            assert time.monotonic() < deadline, "the talker never advertised"
+            time.sleep(0.05)
+        # A subscription registered with the master but whose node never connects: missing.
+        proxy.registerSubscriber("/chatter", "std_msgs/String", "http://127.0.0.1:1/")
+        assert ("/chatter", "/late_talker", "/test") in graph_unconnected(proxy)
+        proxy.unregisterSubscriber("/chatter", "http://127.0.0.1:1/")
+        # A real subscriber: connected within the deadline, then nothing is missing on /chatter.
+        listener = subprocess.Popen([sys.executable, "-c", LISTENER], env=env, start_new_session=True)
+        try:
+            while [m for m in graph_unconnected(proxy) if m[0] == "/chatter"] or \
+                    "/listener" not in dict(proxy.getSystemState()[1]).get("/chatter", []):
+                assert time.monotonic() < deadline, "the listener never connected: %s" % graph_unconnected(proxy)
+                time.sleep(0.05)
+        finally:
+            listener.terminate()
+            listener.wait(timeout=30)
+    finally:
+        talker.terminate()
+        talker.wait(timeout=30)
