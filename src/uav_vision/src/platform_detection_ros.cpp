@@ -106,6 +106,7 @@ PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle p
     : config_(PlatformDetectionConfig::load(pnh)),
       localizer_(config_.localizer, CameraMount::bottomCamera(config_.localizer.height.camera_below_base_link)),
       image_transport_(nh),
+      attitudes_(config_.imu_max_offset),
       lockstep_(nh, "ardrone/bottom/image_raw") {
   platform_in_base_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_ardrone", 10);
   platform_in_world_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_world", 10);
@@ -153,11 +154,11 @@ void PlatformDetectionRos::onImu(const sensor_msgs::ImuConstPtr& msg) {
                       imu_sub_.getTopic().c_str());
     return;
   }
-  const ros::Time stamp = msg->header.stamp;
-  // Sim time jumped back (simulator restarted): the old attitudes belong to another timeline.
-  if (!attitudes_.empty() && stamp < attitudes_.back().first) attitudes_.clear();
-  attitudes_.emplace_back(stamp, q.normalized());
-  while (!attitudes_.empty() && (stamp - attitudes_.front().first).toSec() > 1.0) attitudes_.pop_front();
+  const auto& w = msg->angular_velocity;
+  // angular_velocity_covariance[0] == -1: no rates (REP 145); the attitude is then held between samples.
+  const Eigen::Vector3d body_rate = msg->angular_velocity_covariance[0] == -1.0 ? Eigen::Vector3d::Zero()
+                                                                                 : Eigen::Vector3d(w.x, w.y, w.z);
+  attitudes_.add(msg->header.stamp.toSec(), q, body_rate);  // a stamp going back restarts the history
 }
 
 void PlatformDetectionRos::onSonar(const sensor_msgs::RangeConstPtr& msg) {
@@ -215,24 +216,6 @@ std::optional<Eigen::Vector3d> PlatformDetectionRos::dronePositionAt(const ros::
   return nearest.position + offset * nearest.velocity;
 }
 
-std::optional<Eigen::Quaterniond> PlatformDetectionRos::attitudeAt(const ros::Time& stamp) const {
-  if (attitudes_.empty()) return std::nullopt;
-  // First attitude not older than the image; interpolate with the one before when both exist.
-  const auto later = std::lower_bound(attitudes_.begin(), attitudes_.end(), stamp,
-                                      [](const auto& a, const ros::Time& t) { return a.first < t; });
-  if (later != attitudes_.end() && later != attitudes_.begin()) {
-    const auto earlier = std::prev(later);
-    const double span = (later->first - earlier->first).toSec();
-    if (span <= 2.0 * config_.imu_max_offset) {
-      const double f = span > 0.0 ? (stamp - earlier->first).toSec() / span : 0.0;
-      return earlier->second.slerp(f, later->second);
-    }
-  }
-  const auto& nearest = later == attitudes_.end() ? attitudes_.back() : *later;
-  if (std::abs((nearest.first - stamp).toSec()) <= config_.imu_max_offset) return nearest.second;
-  return std::nullopt;
-}
-
 double PlatformDetectionRos::freshValue(const std::optional<std::pair<ros::Time, double>>& reading,
                                         const ros::Time& stamp, double timeout) {
   if (!reading || std::abs((stamp - reading->first).toSec()) > timeout) return NAN;
@@ -275,7 +258,7 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
     return;
   }
   const ros::Time stamp = msg->header.stamp;
-  const auto attitude = attitudeAt(stamp);
+  const auto attitude = attitudes_.at(stamp.toSec());
   if (!attitude) {
     ROS_WARN_THROTTLE(period, "%s: no %s within %.3f s of the frame: dropped", topic, imu_sub_.getTopic().c_str(),
                       config_.imu_max_offset);

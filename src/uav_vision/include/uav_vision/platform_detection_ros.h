@@ -20,6 +20,7 @@
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/Range.h>
 
+#include "uav_vision/attitude_history.h"
 #include "uav_vision/pad_localizer.h"
 
 namespace uav_vision {
@@ -57,8 +58,6 @@ class PlatformDetectionRos {
   void onAltimeter(const landing_msgs::AltimeterConstPtr& msg);
   void onOdomEstimate(const nav_msgs::OdometryConstPtr& msg);
 
-  // IMU attitude nearest to `stamp`, if one is within imu_max_offset.
-  std::optional<Eigen::Quaterniond> attitudeAt(const ros::Time& stamp) const;
   // The drone's estimated position at `stamp`: interpolated between two estimates, else moved from the
   // nearest one (at most odom_timeout away) with its velocity. The estimate trails the camera by the
   // estimator's latency, and the drone moves by metres per second, so the newest one is not good enough.
@@ -79,7 +78,7 @@ class PlatformDetectionRos {
   ros::Publisher platform_in_base_pub_, platform_in_world_pub_, indicator_in_base_pub_;
 
   std::optional<CameraIntrinsics> intrinsics_;
-  std::deque<std::pair<ros::Time, Eigen::Quaterniond>> attitudes_;  // last second of IMU orientations
+  AttitudeHistory attitudes_;  // the last second of IMU attitudes and rates
   std::optional<std::pair<ros::Time, double>> sonar_, altitude_;
   struct PositionEstimate {
     ros::Time stamp;
