@@ -230,11 +230,15 @@ MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Ei
   const int s = static_cast<int>(source);
   if (!std::isfinite(stamp) || !z.allFinite())
     return MeasurementOutcome::kDroppedInvalid;
-  if (stamp <= last_stamp_[s] || (initialised_ && stamp <= state_time_))
+  if (stamp <= last_stamp_[s])
     return MeasurementOutcome::kDroppedStale;
   last_stamp_[s] = stamp;
+  // Checked before the state's time: a GPS fix stamped with the same instant as a vision fix (the
+  // simulator publishes both on the same step) is not stale, just not needed.
   if (source == Source::kGps && stamp - last_vision_accepted_time_ < params_.gps_vision_timeout)
     return MeasurementOutcome::kIgnored;
+  if (initialised_ && stamp <= state_time_)
+    return MeasurementOutcome::kDroppedStale;
 
   // Starts a track on this fix. A GPS fix says nothing about the height: keep the estimate, or assume
   // the configured pad height.
