@@ -15,7 +15,7 @@ from std_msgs.msg import Empty
 
 WALL_TIMEOUT = 120.0
 RATES = {  # topic: (type, expected rate in sim time [Hz])
-    "/ardrone/imu": (Imu, 100.0), "/ardrone/bottom/image_raw": (Image, 30.0),
+    "/ardrone/imu": (Imu, 50.0), "/ardrone/bottom/image_raw": (Image, 30.0),
     "/ardrone/bottom/camera_info": (CameraInfo, 30.0), "/ardrone/sonar_height": (Range, 25.0),
     "/ardrone/altimeter": (Altimeter, 20.0), "/ardrone/navdata": (Navdata, 50.0),
     "/ardrone/gps/odom": (Odometry, 5.0), "/ardrone/ground_truth/state": (Odometry, 50.0),

@@ -2,7 +2,7 @@
 
 Ground truth never enters here (docs/conventions.md). The sensors and what each contributes:
 
-- IMU orientation (100 Hz): attitude and yaw, used as measured (the AR.Drone's own attitude filter
+- IMU orientation (50 Hz): attitude and yaw, used as measured (the AR.Drone's own attitude filter
   already fuses gyro and accelerometer; its noise is 0.2 deg).
 - Optical-flow velocity from navdata (50 Hz, heading frame, 0.05 m/s): rotated to ``world`` with the
   IMU yaw and integrated into the horizontal position (dead reckoning: smooth, but it drifts).

@@ -208,7 +208,6 @@ class TrackingNode:
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
         self.estimate = None          # (stamp, DroneState without sonar)
         self.sonar = None             # latest valid sonar range or None
-        self.imu_yaw = None           # (stamp, yaw)
         self.navdata_state = None
         self.path = None              # (times, positions) of the latest kalman_prediction_path
         self.pad_odom = None          # (stamp, position, velocity) of the latest kalman_platform_odom
@@ -229,7 +228,6 @@ class TrackingNode:
         rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
         rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, self.on_detection, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("platform_tracking/command", String, self.on_command, queue_size=10)
@@ -288,13 +286,6 @@ class TrackingNode:
         with self.lock:
             self.sonar = float(msg.range) if valid else None
 
-    def on_imu(self, msg):
-        q = msg.orientation
-        if not finite(q.w, q.x, q.y, q.z):
-            return warn_dropped("ardrone/imu", "non-finite orientation")
-        with self.lock:
-            self.imu_yaw = (stamp_of(msg), yaw_from_quaternion(q.w, q.x, q.y, q.z))
-
     def on_detection(self, msg):
         with self.lock:
             self.seen_at = stamp_of(msg)
@@ -334,9 +325,7 @@ class TrackingNode:
             drone = None
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
                 state = self.estimate[1]
-                yaw = self.imu_yaw[1] if self.imu_yaw is not None and t - self.imu_yaw[0] <= ESTIMATE_MAX_AGE \
-                    else state.yaw
-                drone = DroneState(state.position, state.velocity, yaw, self.sonar).moved(t - self.estimate[0])
+                drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
                             force_land="force_land" in self.requests, landing_allowed=self.landing_allowed,
