@@ -372,6 +372,20 @@ def test_final_descent_is_called_off_when_the_error_grows():
     assert "commit_abort_error" in f.lines[-1] and not f.sm.committed
 
 
+def test_final_descent_is_called_off_when_the_pad_draws_away_though_the_error_is_still_small():
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    error, speed = 0.1, 0.5  # the pad has begun to brake: inside commit_abort_error, growing at 0.5 m/s
+    assert error < P.commit_abort_error < error + speed * P.commit_abort_lookahead
+    out = f.step(drone=drone(height=0.25, vx=speed), pad=pad(f.t + 1 / 30, x=-error))
+    assert not out.send_land and out.command.vz == pytest.approx(P.retry_climb_rate)
+    assert "commit_abort_error" in f.lines[-1] and not f.sm.committed
+    g = landing_flight(height=P.gate_height)
+    g.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    out = g.step(drone=drone(height=0.25, vx=-0.2), pad=pad(g.t + 1 / 30, x=-error))  # closing in: carries on
+    assert g.sm.committed and out.command.vz == pytest.approx(-P.final_descent_rate)
+
+
 def test_touchdown_is_not_committed_without_a_fresh_detection():
     f = landing_flight(height=P.gate_height)
     f.run(1.0, make=fresh(height=P.gate_height), vision_age=P.gate_vision_age + 0.05)

@@ -143,6 +143,7 @@ class TrackingParams:
     final_descent_rate: float = spec(1.0, 0.05, 3.0, "m/s")
     land_height: float = spec(0.12, 0.0, 5.0, "m")
     commit_abort_error: float = spec(0.2, 0.01, 5.0, "m")
+    commit_abort_lookahead: float = spec(0.3, 0.0, 2.0, "s")
     land_ack_timeout: float = spec(1.0, 0.05, 30.0, "s")
 
     def check(self, source="tracking parameters"):

@@ -14,7 +14,8 @@ States and what the drone does in each (heights are above the pad, measured from
   error and relative speed have stayed inside the gate, with the pad seen within ``gate_vision_age``
   and its speed steady, for ``gate_ready_time``: it then descends at ``final_descent_rate``, still tracking, and
   sends ``ardrone/land`` at ``land_height`` (the drone settles by itself, still obeying the horizontal
-  command); an error above ``commit_abort_error`` before that calls the touchdown off. A gate not met
+  command); an error above ``commit_abort_error`` before that, now or ``commit_abort_lookahead`` later at
+  the present relative velocity, calls the touchdown off. A gate not met
   within ``gate_timeout``, or a touchdown called off, climbs back to ``retry_height`` to re-try.
 - RELOCATING: the pad has not been seen for ``lost_timeout``: climb to ``relocate_height`` for a
   wider view and fly to the last predicted position (following the prediction for as long as it
@@ -340,10 +341,11 @@ class TrackingStateMachine:
             return self._final_descent(inp)
         if self.committed and pad is not None and pad.age(t) <= p.lost_timeout + 2.0:
             # The last half second: the camera loses the pad this close, the prediction carries on.
-            error, _ = self.controller.errors(t, drone, pad)
+            error, relative_velocity = self.controller.errors(t, drone, pad)
             height = self._height(drone, pad, t)
             self._out.error, self._out.height = float(np.hypot(*error)), height
-            return self._fast_descent(inp, self._out.error, height)
+            error_ahead = float(np.hypot(*(error + p.commit_abort_lookahead * relative_velocity)))
+            return self._fast_descent(inp, self._out.error, error_ahead, height)
         if not self._fresh(pad, t, p.lost_timeout):
             self._transition(State.RELOCATING, "target lost during the descent", t)
             return self._relocating(inp)
@@ -394,7 +396,7 @@ class TrackingStateMachine:
                 self.committed = True
                 self._event("touchdown committed: descending at %.1f m/s (height %.2f m, error %.3f m, relative "
                             "speed %.2f m/s)" % (p.final_descent_rate, height, distance, relative_speed))
-                return self._fast_descent(inp, distance, height)
+                return self._fast_descent(inp, distance, distance, height)
             if at_gate:
                 # The gate timeout is for a drone that cannot keep on target, not for waiting out a
                 # vehicle's change of speed while it does.
@@ -431,13 +433,16 @@ class TrackingStateMachine:
         self.at_gate_since = self.ready_since = None
         self._event("re-try %d: %s; climbing from %.2f m to %.2f m" % (self.retries, reason, height, self.p.retry_height))
 
-    def _fast_descent(self, inp, distance, height):
+    def _fast_descent(self, inp, distance, distance_ahead, height):
         """Committed: the last few decimetres at final_descent_rate while tracking, so the pad has little
-        time to move unseen; ardrone/land at land_height. Until then a growing error still calls it off."""
+        time to move unseen; ardrone/land at land_height. Until then a growing error still calls it off: the
+        error now, or the error commit_abort_lookahead from now at the present relative velocity (a pad that
+        starts braking or turning during the descent is already drawing away)."""
         p, t = self.p, inp.time
-        if distance > p.commit_abort_error:
-            self._start_retry(t, "error %.2f m > commit_abort_error %.2f m during the final descent" % (
-                distance, p.commit_abort_error), height)
+        if max(distance, distance_ahead) > p.commit_abort_error:
+            self._start_retry(t, "error %.2f m (%.2f m in %.2f s) > commit_abort_error %.2f m during the final "
+                              "descent" % (distance, distance_ahead, p.commit_abort_lookahead, p.commit_abort_error),
+                              height)
             self._out.command = self._command(self._tracking_xy(t, inp.drone, self.last_pad), p.retry_climb_rate,
                                               inp.drone.yaw)
             return
