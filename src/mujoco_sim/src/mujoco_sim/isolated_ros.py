@@ -71,50 +71,27 @@ def graph_unconnected(master, timeout=2.0):
     return unconnected_subscriptions(state, outbound)
 
 
-class IsolatedLaunch:
-    """``roslaunch -p PORT`` of ``launch_args`` (package, file, arg:=value...) in a new process group.
+class IsolatedProcess:
+    """``command`` run against the master at ``master_uri``, in a new process group, its output in
+    ``log_path``. Use as a context manager: leaving it interrupts the process (SIGINT, as Ctrl-C) and waits."""
 
-    Use as a context manager; ``master_uri`` is what clients in this process must use (set
-    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``)."""
-
-    def __init__(self, launch_args, log_path, port=None):
-        self.port = port or free_port()
-        self.master_uri = "http://127.0.0.1:%d" % self.port
-        self.launch_args, self.log_path = list(launch_args), log_path
+    def __init__(self, command, log_path, master_uri):
+        self.command, self.log_path, self.master_uri = list(command), log_path, master_uri
         self.process, self.interrupted = None, False
 
     def __enter__(self):
         env = dict(os.environ, ROS_MASTER_URI=self.master_uri, ROS_HOSTNAME="127.0.0.1")
         env.pop("ROS_IP", None)
         self._log = open(self.log_path, "w")
-        # A node exits within about a second of SIGINT. One that hangs (rospy runs its shutdown inside the
-        # signal handler and can deadlock on a lock the interrupted thread holds: the simulator did, 1 run
-        # in 10, before it handled the signal itself) would cost roslaunch's default 15 s + 2 s.
-        command = ["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3", "--sigterm-timeout=1"]
-        self.process = subprocess.Popen(command + self.launch_args, env=env, stdout=self._log,
-                                        stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+        self.process = subprocess.Popen(self.command, env=env, stdout=self._log, stderr=subprocess.STDOUT,
+                                        stdin=subprocess.DEVNULL, start_new_session=True)
         return self
-
-    def wait_for_master(self, timeout=60.0):
-        import rosgraph
-        deadline = time.monotonic() + timeout
-        master = rosgraph.Master("/isolated_launch", master_uri=self.master_uri)
-        while time.monotonic() < deadline:
-            if self.process.poll() is not None:
-                raise RuntimeError("roslaunch exited with code %s; see %s" % (self.process.returncode, self.log_path))
-            try:
-                master.getPid()
-                return
-            except Exception:  # master not up yet
-                time.sleep(0.05)
-        raise TimeoutError("no ROS master on port %d after %.0f s; see %s" % (self.port, timeout, self.log_path))
 
     def alive(self):
         return self.process is not None and self.process.poll() is None
 
     def interrupt(self):
-        """Ask roslaunch to stop its nodes (SIGINT, as Ctrl-C) without waiting: several launches then stop
-        side by side (each takes 0.5-1.5 s); leaving the context waits for it."""
+        """SIGINT without waiting: several processes then stop side by side; leaving the context waits."""
         if self.alive() and not self.interrupted:
             os.killpg(self.process.pid, signal.SIGINT)
             self.interrupted = True
@@ -129,3 +106,31 @@ class IsolatedLaunch:
                 self.process.wait()
         self._log.close()
         return False
+
+
+class IsolatedLaunch(IsolatedProcess):
+    """``roslaunch -p PORT`` of ``launch_args`` (package, file, arg:=value...) under its own master on a
+    free port, so several runs can coexist. ``master_uri`` is what clients in this process must use (set
+    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``)."""
+
+    def __init__(self, launch_args, log_path, port=None):
+        self.port = port or free_port()
+        # A node exits within about a second of SIGINT. One that hangs (rospy runs its shutdown inside the
+        # signal handler and can deadlock on a lock the interrupted thread holds: the simulator did, 1 run
+        # in 10, before it handled the signal itself) would cost roslaunch's default 15 s + 2 s.
+        command = ["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3", "--sigterm-timeout=1"]
+        super().__init__(command + list(launch_args), log_path, "http://127.0.0.1:%d" % self.port)
+
+    def wait_for_master(self, timeout=60.0):
+        import rosgraph
+        deadline = time.monotonic() + timeout
+        master = rosgraph.Master("/isolated_launch", master_uri=self.master_uri)
+        while time.monotonic() < deadline:
+            if self.process.poll() is not None:
+                raise RuntimeError("roslaunch exited with code %s; see %s" % (self.process.returncode, self.log_path))
+            try:
+                master.getPid()
+                return
+            except Exception:  # master not up yet
+                time.sleep(0.05)
+        raise TimeoutError("no ROS master on port %d after %.0f s; see %s" % (self.port, timeout, self.log_path))
