@@ -41,4 +41,19 @@ def test_short_benchmark_run_scores_the_good_scenario_and_marks_the_bad_one(tmp_
     assert "| **all** | 1/2 |" in summary, summary
     assert "- `typo`: error" in summary
     assert (out / "short_battery_10" / "result.json").is_file()
-    assert any(name.endswith(".bag") for name in os.listdir(out / "short_battery_10"))
+    bags = [out / "short_battery_10" / name for name in os.listdir(out / "short_battery_10") if name.endswith(".bag")]
+    assert len(bags) == 1
+    # The bag holds the flight from its first sim-second (its connections once came up seconds late).
+    first = first_recorded(bags[0], {"/groundtruth/ardrone", "/ardrone/navdata", "/ardrone/odom_estimate", "/tf"})
+    assert len(first) == 4 and max(first.values()) < 0.5, first
+
+
+def first_recorded(bag, topics):
+    """{topic: sim time [s] of its first message in ``bag``}."""
+    from rosbags.highlevel import AnyReader
+    first = {}
+    with AnyReader([bag]) as reader:
+        connections = [c for c in reader.connections if c.topic in topics]
+        for connection, stamp, _ in reader.messages(connections=connections):
+            first.setdefault(connection.topic, stamp * 1e-9)
+    return first
