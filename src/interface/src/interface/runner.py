@@ -125,9 +125,9 @@ class FlightMonitor:
     def _outputs_of_every_node(self):
         """One topic each node of the landing stack advertises when it starts: once all are advertised,
         every node is up and has subscribed to its inputs (the nodes subscribe as they advertise)."""
-        stack = ["/ardrone/odom_estimate", "/kalman_prediction_path", "/platform/current_platform_position_in_world"] \
-            if self.s.get("_needs_tracker") else []
-        return stack + (["/supervisor/mode", "/emergency/state", "/cmd_vel_mux/selected"] if self.s.get("_supervisor") else [])
+        stack = ["/ardrone/odom_estimate", "/kalman_prediction_path", "/platform/current_platform_position_in_world"]
+        supervision = ["/supervisor/mode", "/emergency/state", "/cmd_vel_mux/selected"]
+        return (stack if self.s.get("_needs_tracker") else []) + (supervision if self.s.get("_supervisor") else [])
 
     def _wait(self, condition, what, deadline):
         while not condition():
