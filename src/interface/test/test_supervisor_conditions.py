@@ -10,8 +10,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "src"))
 from interface.conditions import (MISSING, PENDING, ConditionTableError, evaluate, load_table, parse_table,  # noqa: E402
                                   read_value)
 from interface.supervisor import Flight  # noqa: E402
-from interface.supervisor_measures import (PlatformSpeed, SensorWatchdog, TargetLostTimer, VerifiedParams,  # noqa: E402
-                                           flight_from_navdata)
+from interface.supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, flight_from_navdata  # noqa: E402
 
 TABLE_PATH = os.path.join(HERE, "..", "config", "conditions.yaml")
 
@@ -164,18 +163,6 @@ def test_sensor_watchdog_counts_from_start_and_from_the_last_message():
     watchdog.seen("imu", 10.5)
     assert watchdog.silence("camera", 11.5) == pytest.approx(1.5)   # never heard of: since the start
     assert watchdog.silence("imu", 11.5) == pytest.approx(1.0)
-
-
-def test_verified_params_prefer_the_master_over_a_stale_cache_until_the_cache_changes():
-    cache, master = {"drone_battery": 88.5}, {"drone_battery": 88.5}
-    params = VerifiedParams(["drone_battery"], cache.get, master.get, period_s=1.0)
-    assert params.values(0.0) == {"drone_battery": 88.5}
-    master["drone_battery"] = "abc"          # the operator's push has not reached the cache
-    assert params.values(0.5) == {"drone_battery": 88.5}   # not checked yet
-    assert params.values(1.0) == {"drone_battery": "abc"}  # checked: the master wins
-    assert params.values(1.5) == {"drone_battery": "abc"}  # and keeps winning over the stale cache
-    cache["drone_battery"] = master["drone_battery"] = 10.0  # a newer push: the cache is right again
-    assert params.values(1.6) == {"drone_battery": 10.0}
 
 
 def test_sensor_watchdog_counts_a_late_connection_from_when_it_connected():

@@ -19,36 +19,6 @@ def flight_from_navdata(state):
     return Flight.UNKNOWN
 
 
-class VerifiedParams:
-    """Values of parameters read from rospy's cache, checked against the master every ``period_s``.
-
-    The master pushes updates from concurrent writers (the simulator's battery mirror, an operator) in no
-    guaranteed order, so the cache may keep an older value. A master value that differs from the cache
-    wins until the cache changes again (a newer push arrived). ``read_cached(name)`` and
-    ``read_master(name)`` return a value or MISSING."""
-
-    def __init__(self, names, read_cached, read_master, period_s):
-        self.names, self.read_cached, self.read_master = list(names), read_cached, read_master
-        self.period_s = period_s
-        self.verified_at = None
-        self.overrides = {}  # name -> (value on the master, stale cached value)
-
-    def values(self, t):
-        values = {name: self.read_cached(name) for name in self.names}
-        if self.verified_at is None or not 0.0 <= t - self.verified_at < self.period_s:
-            self.verified_at = t
-            for name in self.names:
-                actual = self.read_master(name)
-                if actual != values[name]:
-                    self.overrides[name] = (actual, values[name])
-        for name, (actual, stale) in list(self.overrides.items()):
-            if values[name] == stale:
-                values[name] = actual
-            else:
-                del self.overrides[name]
-        return values
-
-
 class SensorWatchdog:
     """Sim seconds since each sensor topic last published. A sensor never heard of counts from the
     moment the watchdog started, so a topic that never comes is reported missing after the timeout;

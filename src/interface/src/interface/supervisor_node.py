@@ -23,15 +23,13 @@ from std_srvs.srv import Trigger, TriggerResponse
 
 from .conditions import MISSING, ConditionTableError, load_table
 from .supervisor import Flight, Settings, SettingsError, Supervisor
-from .supervisor_measures import (PlatformSpeed, SensorWatchdog, TargetLostTimer, VerifiedParams,
-                                  flight_from_navdata)
+from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, flight_from_navdata
 
 # The camera's liveness is read from camera_info, which the driver publishes with every frame: the same
 # arrivals without copying 230 kB images into this process.
 SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/camera_info", "imu_silence_s": "ardrone/imu",
                  "odometry_silence_s": "ardrone/gps/odom", "sonar_silence_s": "ardrone/sonar_height"}
 SERVICES = ("landing", "emergency", "manual", "continue")
-PARAM_VERIFY_PERIOD_S = 1.0  # how often the condition parameters are re-read (uncached: see _read_param) [s]
 NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
     "rate_hz": (5.0, 200.0),
     "platform_odom_timeout_s": (0.05, 60.0),
@@ -113,8 +111,6 @@ class SupervisorNode:
                 rospy.set_param("/" + name, value)
                 rospy.loginfo("supervisor: /%s was not set: starting from %g (thesis Flight Management default)",
                               name, value)
-        self.conditions = VerifiedParams(self.table.params(), self._read_param,
-                                         lambda name: self._read_param(name, cached=False), PARAM_VERIFY_PERIOD_S)
         # Subscribe to every condition parameter now, so the master pushes changes from here on.
         for name in self.table.params():
             self._read_param(name)
@@ -167,17 +163,17 @@ class SupervisorNode:
         return accepted, message
 
     @staticmethod
-    def _read_param(name, cached=True):
+    def _read_param(name):
         try:
-            # Cached: pushed by the master, no XML-RPC round trip per poll. (Uncached, rospy.get_param
-            # answers from the same cache once the key is in it; asking the master itself each second
-            # slowed the supervisor's ticks at start-up by seconds, so the check stays on rospy's side.)
-            return rospy.get_param_cached("/" + name) if cached else rospy.get_param("/" + name)
+            # Cached: pushed by the master, no XML-RPC round trip per tick. The simulator's battery mirror
+            # never overwrites an operator's value on the master (it checks there first), so the pushes
+            # end with the value the master holds.
+            return rospy.get_param_cached("/" + name)
         except KeyError:
             return MISSING
 
     def _readings(self, t):
-        readings = self.conditions.values(t)
+        readings = {name: self._read_param(name) for name in self.table.params()}
         readings["platform_speed"] = self.platform.value(t)
         readings["target_lost_s"] = self.target.value(t)
         for name, subscriber in self.sensor_subscribers.items():
