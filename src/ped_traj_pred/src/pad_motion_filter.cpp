@@ -220,6 +220,49 @@ MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, dou
   return MeasurementOutcome::kAccepted;
 }
 
+MeasurementOutcome PadMotionFilter::addTurnRate(double stamp, double turn_rate, double variance)
+{
+  if (!std::isfinite(stamp) || !std::isfinite(turn_rate) || !isPositiveFinite(variance))
+    return MeasurementOutcome::kDroppedInvalid;
+  if (!isTracking(stamp) || form_ != Model::Form::kPolar)
+    return MeasurementOutcome::kIgnored;
+  const double age = state_time_ - stamp;
+  if (age > kMaxHeadingAge)
+    return MeasurementOutcome::kDroppedStale;
+  Model::Vector combined;
+  Model::Matrix combined_P;
+  combine(x_, P_, mode_probabilities_, combined, combined_P);
+  if (!(std::abs(combined(Model::kSpeed)) > kHeadingMinSpeed))
+    return MeasurementOutcome::kIgnored;
+  const double R = variance + std::pow(kYawAccelerationStd * age, 2);
+  std::array<double, kModes> log_likelihood;
+  for (int j = 0; j < kModes; ++j)
+  {
+    Model::Vector& x = x_[j];
+    Model::Matrix& P = P_[j];
+    // h(x) = s * kappa, linearised: dh/ds = kappa, dh/dkappa = s.
+    Eigen::Matrix<double, 1, Model::kSize> H = Eigen::Matrix<double, 1, Model::kSize>::Zero();
+    H(0, Model::kSpeed) = x(Model::kCurvature);
+    H(0, Model::kCurvature) = x(Model::kSpeed);
+    const double S = (H * P * H.transpose())(0, 0) + R;
+    const double innovation = turn_rate - x(Model::kSpeed) * x(Model::kCurvature);
+    log_likelihood[j] = -0.5 * (innovation * innovation / S + std::log(2.0 * M_PI * S));
+    const Model::Vector K = P * H.transpose() / S;
+    const Model::Matrix I_KH = Model::Matrix::Identity() - K * H;
+    const Model::Matrix P_updated = I_KH * P * I_KH.transpose() + K * R * K.transpose();
+    x += K * innovation;
+    Model::normalise(form_, x);
+    P = 0.5 * (P_updated + P_updated.transpose());
+  }
+  // A turn rate the steady mode cannot explain moves the weight to the manoeuvre mode, which follows it.
+  const double max_log = std::max(log_likelihood[0], log_likelihood[1]);
+  for (int j = 0; j < kModes; ++j)
+    mode_probabilities_[j] *= std::exp(log_likelihood[j] - max_log);
+  mode_probabilities_ /= mode_probabilities_.sum();
+  updateForm();
+  return MeasurementOutcome::kAccepted;
+}
+
 template <int M>
 MeasurementOutcome PadMotionFilter::addFix(Source source, double stamp, const Eigen::Matrix<double, M, 1>& z,
                                            const Eigen::Matrix<double, M, Model::kSize>& H, double variance,

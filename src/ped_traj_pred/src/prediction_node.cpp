@@ -211,6 +211,14 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
     if (filter_.addHeading(stamp.toSec(), yawOf(q), yaw_variance) == MeasurementOutcome::kDroppedInvalid)
       ROS_WARN_THROTTLE(5.0, "Dropping a heading with NaN or inf on %s", gps_sub_.getTopic().c_str());
   }
+  // ...and its yaw rate, if reported, the turn rate through the corners (vision alone follows them late).
+  const double yaw_rate_variance = msg->twist.covariance[35];
+  if (std::isfinite(yaw_rate_variance) && yaw_rate_variance > 0.0 && yaw_rate_variance < kUnknownVariance)
+  {
+    if (filter_.addTurnRate(stamp.toSec(), msg->twist.twist.angular.z, yaw_rate_variance) ==
+        MeasurementOutcome::kDroppedInvalid)
+      ROS_WARN_THROTTLE(5.0, "Dropping a yaw rate with NaN or inf on %s", gps_sub_.getTopic().c_str());
+  }
 }
 
 void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp)

@@ -394,6 +394,53 @@ TEST(Heading, TheReportedHeadingKeepsTheTrackOnItsAxisThroughReversals)
   }
 }
 
+/// RMS error of the filter's turn rate [rad/s] on a figure 8 at 3 m/s (radius 3 m: +-1 rad/s, the turn
+/// reversing at 3 rad/s^2 every loop), vision with 3 cm noise; with the vehicle's yaw rate (5 Hz, 0.02
+/// rad/s noise, 0.1 s late) if `yaw_rate`.
+double figure8TurnRateError(bool yaw_rate, unsigned seed)
+{
+  const SyntheticTrajectory trajectory(makePath(PathKind::kFigure8, 3.0, 3.0, 1.0, 3.0, 40.0), kCameraRate);
+  PadMotionFilter filter{ FilterParameters{} };
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const auto true_turn_rate = [&](int k) {
+    return TurnAccelerationModel::wrapAngle(trajectory.heading(k + 1) - trajectory.heading(k - 1)) * kCameraRate / 2.0;
+  };
+  double squared_sum = 0.0;
+  int count = 0;
+  for (int k = 3; k + 1 < trajectory.size(); ++k)
+  {
+    const double t = trajectory.sampleTime(k);
+    if (yaw_rate && k % 6 == 0)
+      filter.addTurnRate(t - 0.1, true_turn_rate(k - 3) + 0.02 * unit(rng), 0.02 * 0.02);
+    filter.addVision(t, trajectory.position(k) + 0.03 * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)), 0.03 * 0.03);
+    if (t > 5.0)
+    {
+      squared_sum += std::pow(filter.stateAt(t)->turn_rate - true_turn_rate(k), 2);
+      ++count;
+    }
+  }
+  return std::sqrt(squared_sum / count);
+}
+
+// Through a figure 8's turn reversals the fixes alone give the turn rate a few tenths of a second late
+// (the same lag put the drone 0.9 m outside every corner of a square at 3 m/s); the vehicle's own yaw
+// rate, at 5 Hz and 0.1 s late, follows them closer: RMS 0.21 instead of 0.33 rad/s.
+TEST(TurnRate, TheReportedYawRateKeepsTheTurnRateThroughReversals)
+{
+  PadMotionFilter filter{ FilterParameters{} };
+  EXPECT_EQ(filter.addTurnRate(0.0, 0.5, 1e-3), MeasurementOutcome::kIgnored);  // no track
+  EXPECT_EQ(filter.addTurnRate(0.0, std::nan(""), 1e-3), MeasurementOutcome::kDroppedInvalid);
+  EXPECT_EQ(filter.addTurnRate(0.0, 0.5, 0.0), MeasurementOutcome::kDroppedInvalid);
+  for (unsigned seed = 1; seed <= 3; ++seed)
+  {
+    const double without = figure8TurnRateError(false, seed), with = figure8TurnRateError(true, seed);
+    std::printf("[ stats    ] seed %u: turn-rate error RMS %.3f rad/s vision only, %.3f rad/s with the yaw rate\n",
+                seed, without, with);
+    EXPECT_LT(with, 0.75 * without) << "seed " << seed;
+  }
+}
+
 TEST(Gaps, RandomDropsAndBlackoutsAreCoastedThrough)
 {
   MeasurementSpec measurements;

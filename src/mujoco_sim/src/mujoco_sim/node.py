@@ -421,13 +421,14 @@ class SimNode:
         self.pub_gps.publish(odom)
 
     def _publish_vehicle_gps(self, stamp):
-        (x, y, yaw), (vx, vy) = self.sim.vehicle_gps()
+        (x, y, yaw), (vx, vy), yaw_rate = self.sim.vehicle_gps()
         odom = Odometry(header=self._header(stamp, "world"), child_frame_id="summit_xl/base_link")
         _fill_pose(odom.pose.pose, (x, y, 0.0), _yaw_quaternion(yaw))
         _fill_vector(odom.twist.twist.linear, (vx, vy, 0.0))
+        odom.twist.twist.angular.z = yaw_rate
         n = self.cfg["noise"]
         odom.pose.covariance = _diag6(n["gps_position_std"] ** 2, math.radians(n["vehicle_heading_std_deg"]) ** 2)
-        odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, 1e6)
+        odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, n["vehicle_yaw_rate_std"] ** 2)
         self.pub_vehicle_gps.publish(odom)
 
     def _publish_navdata(self, stamp):

@@ -52,6 +52,7 @@ SIM_SCHEMA = {
         "gps_position_std": Param(F, 0.0, 10.0, "m"),
         "gps_velocity_std": Param(F, 0.0, 5.0, "m/s"),
         "vehicle_heading_std_deg": Param(F, 0.0, 30.0, "deg"),
+        "vehicle_yaw_rate_std": Param(F, 0.001, 5.0, "rad/s"),
         "flow_velocity_std": Param(F, 0.0, 5.0, "m/s"),
     },
     "sensors": {

@@ -418,14 +418,15 @@ class Simulator:
                 velocity + self._noise("gps", n.get("gps_velocity_std", 0), 3))
 
     def vehicle_gps(self):
-        """GPS-like pose (x, y, yaw) and velocity (vx, vy) of the vehicle, noisy."""
+        """GPS-like pose (x, y, yaw), velocity (vx, vy) and yaw rate of the vehicle (its odometry), noisy."""
         x, y, yaw = self.vehicle_pose()
-        vx, vy, _ = self.vehicle_velocity()
+        vx, vy, yaw_rate = self.vehicle_velocity()
         n = self.noise or {}
         p = self._noise("vehicle_gps", n.get("gps_position_std", 0), 2)
         v = self._noise("vehicle_gps", n.get("gps_velocity_std", 0), 2)
         heading = self._noise("vehicle_gps", math.radians(n.get("vehicle_heading_std_deg", 0)))
-        return (x + p[0], y + p[1], yaw + heading), (vx + v[0], vy + v[1])
+        turn = self._noise("vehicle_gps", n.get("vehicle_yaw_rate_std", 0))
+        return (x + p[0], y + p[1], yaw + heading), (vx + v[0], vy + v[1]), yaw_rate + turn
 
     def flow_velocity(self):
         """Heading-frame velocity as the AR.Drone's optical flow reports it, noisy."""
