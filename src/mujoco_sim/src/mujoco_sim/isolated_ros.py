@@ -1,4 +1,5 @@
-"""Run a launch file under its own ROS master on a free port, so several runs can coexist."""
+"""Run a launch file under its own ROS master on a free port, so several runs can coexist; run more
+processes against that master; and check that every subscription in its graph is connected."""
 import os
 import random
 import signal
