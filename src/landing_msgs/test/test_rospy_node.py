@@ -1,5 +1,6 @@
 """landing_msgs.rospy_node against a real master: the node accepts a burst of connections while its accept
-thread is stuck, and SIGINT ends spin() and a sleep on a sim clock that has stopped."""
+thread is stuck, and SIGINT ends spin() and a sleep on a sim clock that has stopped. How soon they end is
+measured in run_scenario's shut-down (nodes gone 0.25 s after the interrupt instead of 0.5 s), not timed here."""
 import signal
 import socket
 import subprocess
