@@ -22,6 +22,24 @@ bool isNonNegativeFinite(double value)
   return std::isfinite(value) && value >= 0.0;
 }
 
+using Model = TurnAccelerationModel;
+using MeasurementRow = Eigen::Matrix<double, 1, Model::kSize>;
+
+/// Kalman update of one mode by a scalar measurement: row `H`, `innovation` (measured minus predicted),
+/// variance `R`, Joseph form. Returns the innovation variance S.
+double scalarUpdate(Model::Form form, Model::Vector& x, Model::Matrix& P, const MeasurementRow& H,
+                    double innovation, double R)
+{
+  const double S = (H * P * H.transpose())(0, 0) + R;
+  const Model::Vector K = P * H.transpose() / S;
+  const Model::Matrix I_KH = Model::Matrix::Identity() - K * H;
+  const Model::Matrix P_updated = I_KH * P * I_KH.transpose() + K * R * K.transpose();
+  x += K * innovation;
+  Model::normalise(form, x);
+  P = 0.5 * (P_updated + P_updated.transpose());
+  return S;
+}
+
 const FilterParameters& validated(const FilterParameters& parameters)
 {
   const std::string error = parameters.validate();
@@ -189,7 +207,7 @@ MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, dou
   Model::Matrix flip = Model::Matrix::Identity();
   flip(Model::kSpeed, Model::kSpeed) = flip(Model::kAcceleration, Model::kAcceleration) =
       flip(Model::kCurvature, Model::kCurvature) = -1.0;
-  Eigen::Matrix<double, 1, Model::kSize> H = Eigen::Matrix<double, 1, Model::kSize>::Zero();
+  MeasurementRow H = MeasurementRow::Zero();
   H(0, Model::kHeading) = 1.0;
   for (int j = 0; j < kModes; ++j)
   {
@@ -207,14 +225,7 @@ MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, dou
       onsets_.clear();  // their sensitivities are in the old representation
     }
     const double turn_rate_variance = model_.turnRateVariance(form_, x, P);
-    const double R = variance + turn_rate_variance * age * age;
-    const double S = P(Model::kHeading, Model::kHeading) + R;
-    const Model::Vector K = P.col(Model::kHeading) / S;
-    const Model::Matrix I_KH = Model::Matrix::Identity() - K * H;
-    const Model::Matrix P_updated = I_KH * P * I_KH.transpose() + K * R * K.transpose();
-    x += K * innovation;
-    Model::normalise(form_, x);
-    P = 0.5 * (P_updated + P_updated.transpose());
+    scalarUpdate(form_, x, P, H, innovation, variance + turn_rate_variance * age * age);
   }
   updateForm();
   return MeasurementOutcome::kAccepted;
@@ -241,18 +252,12 @@ MeasurementOutcome PadMotionFilter::addTurnRate(double stamp, double turn_rate, 
     Model::Vector& x = x_[j];
     Model::Matrix& P = P_[j];
     // h(x) = s * kappa, linearised: dh/ds = kappa, dh/dkappa = s.
-    Eigen::Matrix<double, 1, Model::kSize> H = Eigen::Matrix<double, 1, Model::kSize>::Zero();
+    MeasurementRow H = MeasurementRow::Zero();
     H(0, Model::kSpeed) = x(Model::kCurvature);
     H(0, Model::kCurvature) = x(Model::kSpeed);
-    const double S = (H * P * H.transpose())(0, 0) + R;
     const double innovation = turn_rate - x(Model::kSpeed) * x(Model::kCurvature);
+    const double S = scalarUpdate(form_, x, P, H, innovation, R);
     log_likelihood[j] = -0.5 * (innovation * innovation / S + std::log(2.0 * M_PI * S));
-    const Model::Vector K = P * H.transpose() / S;
-    const Model::Matrix I_KH = Model::Matrix::Identity() - K * H;
-    const Model::Matrix P_updated = I_KH * P * I_KH.transpose() + K * R * K.transpose();
-    x += K * innovation;
-    Model::normalise(form_, x);
-    P = 0.5 * (P_updated + P_updated.transpose());
   }
   // A turn rate the steady mode cannot explain moves the weight to the manoeuvre mode, which follows it.
   const double max_log = std::max(log_likelihood[0], log_likelihood[1]);
