@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace ped_traj_pred
 {
@@ -235,9 +236,44 @@ MeasurementOutcome PadMotionFilter::addTurnRate(double stamp, double turn_rate, 
 {
   if (!std::isfinite(stamp) || !std::isfinite(turn_rate) || !isPositiveFinite(variance))
     return MeasurementOutcome::kDroppedInvalid;
+  const double age = state_time_ - stamp;
+  const MeasurementOutcome usable = vehicleMeasurementUsable(stamp, age);
+  if (usable != MeasurementOutcome::kAccepted)
+    return usable;
+  // h(x) = s * kappa, linearised: dh/ds = kappa, dh/dkappa = s.
+  modeWeightedUpdate(variance + std::pow(kYawAccelerationStd * age, 2), [&](const Model::Vector& x) {
+    MeasurementRow H = MeasurementRow::Zero();
+    H(0, Model::kSpeed) = x(Model::kCurvature);
+    H(0, Model::kCurvature) = x(Model::kSpeed);
+    return std::make_pair(H, turn_rate - x(Model::kSpeed) * x(Model::kCurvature));
+  });
+  return MeasurementOutcome::kAccepted;
+}
+
+MeasurementOutcome PadMotionFilter::addSpeed(double stamp, const Eigen::Vector2d& velocity_xy, double variance)
+{
+  if (!std::isfinite(stamp) || !velocity_xy.allFinite() || !isPositiveFinite(variance))
+    return MeasurementOutcome::kDroppedInvalid;
+  const double age = state_time_ - stamp;
+  const MeasurementOutcome usable = vehicleMeasurementUsable(stamp, age);
+  if (usable != MeasurementOutcome::kAccepted)
+    return usable;
+  // The speed along the heading at `stamp` (negative when reversing): h(x) = s - a * age. The velocity's
+  // component across the heading is what addHeading and addTurnRate are for.
+  modeWeightedUpdate(variance + std::pow(kSpeedJerkStd * age * age, 2), [&](const Model::Vector& x) {
+    MeasurementRow H = MeasurementRow::Zero();
+    H(0, Model::kSpeed) = 1.0;
+    H(0, Model::kAcceleration) = -age;
+    const Eigen::Vector2d heading(std::cos(x(Model::kHeading)), std::sin(x(Model::kHeading)));
+    return std::make_pair(H, velocity_xy.dot(heading) - (x(Model::kSpeed) - x(Model::kAcceleration) * age));
+  });
+  return MeasurementOutcome::kAccepted;
+}
+
+MeasurementOutcome PadMotionFilter::vehicleMeasurementUsable(double stamp, double age) const
+{
   if (!isTracking(stamp) || form_ != Model::Form::kPolar)
     return MeasurementOutcome::kIgnored;
-  const double age = state_time_ - stamp;
   if (age > kMaxHeadingAge)
     return MeasurementOutcome::kDroppedStale;
   Model::Vector combined;
@@ -245,27 +281,25 @@ MeasurementOutcome PadMotionFilter::addTurnRate(double stamp, double turn_rate, 
   combine(x_, P_, mode_probabilities_, combined, combined_P);
   if (!(std::abs(combined(Model::kSpeed)) > kHeadingMinSpeed))
     return MeasurementOutcome::kIgnored;
-  const double R = variance + std::pow(kYawAccelerationStd * age, 2);
+  return MeasurementOutcome::kAccepted;
+}
+
+template <class Linearise>
+void PadMotionFilter::modeWeightedUpdate(double R, Linearise linearise)
+{
   std::array<double, kModes> log_likelihood;
   for (int j = 0; j < kModes; ++j)
   {
-    Model::Vector& x = x_[j];
-    Model::Matrix& P = P_[j];
-    // h(x) = s * kappa, linearised: dh/ds = kappa, dh/dkappa = s.
-    MeasurementRow H = MeasurementRow::Zero();
-    H(0, Model::kSpeed) = x(Model::kCurvature);
-    H(0, Model::kCurvature) = x(Model::kSpeed);
-    const double innovation = turn_rate - x(Model::kSpeed) * x(Model::kCurvature);
-    const double S = scalarUpdate(form_, x, P, H, innovation, R);
+    const auto [H, innovation] = linearise(x_[j]);
+    const double S = scalarUpdate(form_, x_[j], P_[j], H, innovation, R);
     log_likelihood[j] = -0.5 * (innovation * innovation / S + std::log(2.0 * M_PI * S));
   }
-  // A turn rate the steady mode cannot explain moves the weight to the manoeuvre mode, which follows it.
+  // A measurement the steady mode cannot explain moves the weight to the manoeuvre mode, which follows it.
   const double max_log = std::max(log_likelihood[0], log_likelihood[1]);
   for (int j = 0; j < kModes; ++j)
     mode_probabilities_[j] *= std::exp(log_likelihood[j] - max_log);
   mode_probabilities_ /= mode_probabilities_.sum();
   updateForm();
-  return MeasurementOutcome::kAccepted;
 }
 
 template <int M>

@@ -204,6 +204,9 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
     velocity = reported;
   const ros::Time stamp = stampOf(msg->header);
   logOutcome(filter_.addGps(stamp.toSec(), pad, velocity, velocity_variance), gps_sub_.getTopic(), stamp);
+  // The same velocity is the pad's speed, seen before the vision fixes show a change of it.
+  if (velocity && filter_.addSpeed(stamp.toSec(), *velocity, velocity_variance) == MeasurementOutcome::kDroppedInvalid)
+    ROS_WARN_THROTTLE(5.0, "Dropping a velocity with NaN or inf on %s", gps_sub_.getTopic().c_str());
   // The vehicle's heading, if reported (yaw variance), holds the track's heading through stops and reversals.
   const double yaw_variance = msg->pose.covariance[35];
   if (std::isfinite(yaw_variance) && yaw_variance > 0.0 && yaw_variance < kUnknownVariance)

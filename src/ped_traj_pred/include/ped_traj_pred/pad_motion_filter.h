@@ -40,7 +40,8 @@
 // on the latest fix (the platform really moved, e.g. during a long blackout). GPS is fused only when
 // vision has been absent for gps_vision_timeout; a track that starts on a GPS fix starts from the
 // vehicle's reported velocity if given. The heading the vehicle reports with its GPS (addHeading) holds
-// the track's heading where vision cannot tell it (at low speed, through reversals). Without accepted
+// the track's heading where vision cannot tell it (at low speed, through reversals); its yaw rate
+// (addTurnRate) and velocity (addSpeed) give the turn rate and the speed. Without accepted
 // fixes the filter coasts for max_coast_time, then reports the track lost; the next fix starts a new track.
 #pragma once
 
@@ -193,6 +194,15 @@ public:
   MeasurementOutcome addTurnRate(double stamp, double turn_rate, double variance);
   static constexpr double kYawAccelerationStd = 1.0;  ///< [rad/s^2]
 
+  /// The vehicle's own velocity [m/s] (world x, y; its GPS or odometry twist) at `stamp` [s], with the
+  /// variance per axis [m^2/s^2]: its component along the track's heading is the speed s. The fixes see a
+  /// change of speed (braking, pulling away) only once it has moved the pad, and not at all while the pad
+  /// is out of the camera's view; this sees it at once. Applied to the current state through the
+  /// acceleration over the age, widened by kSpeedJerkStd. Not a fix, and kIgnored, kDroppedStale as
+  /// addTurnRate (at rest the heading, which it is projected on, may be unknown).
+  MeasurementOutcome addSpeed(double stamp, const Eigen::Vector2d& velocity_xy, double variance);
+  static constexpr double kSpeedJerkStd = 2.0;  ///< [m/s^3]
+
   /// A track exists and its last accepted fix is at most max_coast_time older than `now` [s].
   bool isTracking(double now) const;
   bool hasTrack() const { return initialised_; }
@@ -256,6 +266,13 @@ private:
                   double height_variance, const StartVelocity& velocity);
   /// Acquires or gives up the heading (polar / Cartesian form) by its uncertainty.
   void updateForm();
+  /// addTurnRate and addSpeed: kAccepted if a vehicle measurement at `stamp`, `age` older than the state,
+  /// can be fused now.
+  MeasurementOutcome vehicleMeasurementUsable(double stamp, double age) const;
+  /// Scalar update of each mode with (H, innovation) = linearise(mode state) and variance R; each mode's
+  /// likelihood of it re-weights the modes.
+  template <class Linearise>
+  void modeWeightedUpdate(double R, Linearise linearise);
   /// Cartesian -> polar form, every mode with `heading` or its opposite; `combined`: the modes' mixture.
   void enterPolarForm(const Model::Vector& combined, const Model::Matrix& combined_covariance, double heading);
   /// Opens a hypothesis of a step along `directions` right after the fix at `stamp`.
