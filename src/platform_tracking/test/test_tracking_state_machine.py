@@ -386,6 +386,33 @@ def test_final_descent_is_called_off_when_the_pad_draws_away_though_the_error_is
     assert g.sm.committed and out.command.vz == pytest.approx(-P.final_descent_rate)
 
 
+def test_a_touchdown_called_off_with_the_pad_in_view_waits_at_the_gate_and_commits_again():
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    f.step(drone=drone(height=0.25), pad=pad(f.t + 1 / 30, x=P.commit_abort_error + 0.05))
+    assert "back to the gate" in f.lines[-1] and not f.sm.committed and not f.sm.retrying
+    out = f.step(drone=drone(height=0.25), pad=pad(f.t + 1 / 30, x=P.commit_abort_error + 0.05))
+    assert 0.0 < out.command.vz <= P.landing_descent_rate  # up to the gate height, not to retry_height
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=0.25))  # on target again: committed from where it is
+    assert f.sm.committed and "touchdown committed" in f.lines[-1]
+    g = landing_flight(height=P.gate_height, abort_to_gate=False)
+    g.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    g.step(drone=drone(height=0.25), pad=pad(g.t + 1 / 30, x=P.commit_abort_error + 0.05))
+    assert g.sm.retrying and "climbing from 0.25 m to %.2f m" % P.retry_height in g.lines[-1]
+
+
+def test_a_committed_descent_that_loses_the_pad_above_blind_height_is_called_off():
+    f = landing_flight(height=P.commit_height)
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.commit_height - 0.05))
+    assert f.sm.committed
+    out = f.step(drone=drone(height=P.blind_height + 0.1), pad=pad(f.t + 1 / 30), vision_age=P.gate_vision_age + 0.05)
+    assert "blind_height" in f.lines[-1] and not f.sm.committed and out.command.vz > 0.0
+    g = landing_flight(height=P.commit_height)
+    g.run(P.gate_ready_time + 0.1, make=fresh(height=P.commit_height - 0.05))
+    out = g.step(drone=drone(height=P.blind_height - 0.1), pad=pad(g.t + 1 / 30), vision_age=0.5)
+    assert g.sm.committed and out.command.vz == pytest.approx(-P.final_descent_rate)  # the expected blind end
+
+
 def test_touchdown_is_not_committed_without_a_fresh_detection():
     f = landing_flight(height=P.gate_height)
     f.run(1.0, make=fresh(height=P.gate_height), vision_age=P.gate_vision_age + 0.05)

@@ -143,6 +143,7 @@ class TrackingController:
         # short by on a turn (drag, its own loop's lag) is constant there, while in the world it rotates.
         self.integral = np.zeros(2)
         self.travel_heading = 0.0     # direction of the pad's velocity, kept while it stands still [rad]
+        self.steady_since = None      # since when the pad's motion has been steady enough to integrate [s]
         self.last_time = None
         self.velocity_history = collections.deque()  # (stamp, pad velocity) of recent predictions
         self.acceleration = np.zeros(2)
@@ -151,6 +152,7 @@ class TrackingController:
         """Forget the integral (on entering a state where it would be stale)."""
         self.integral[:] = 0.0
         self.last_time = None
+        self.steady_since = None
 
     def errors(self, t, drone: DroneState, pad: PadPrediction):
         """(error now, relative velocity now): horizontal pad minus drone, world frame."""
@@ -205,8 +207,12 @@ class TrackingController:
             self.travel_heading = float(np.arctan2(pad_velocity[1], pad_velocity[0]))
         c, s = np.cos(self.travel_heading), np.sin(self.travel_heading)
         to_world = np.array([[c, -s], [s, c]])
-        steady = abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration and \
-            abs(pad.turn_change_at(t)) <= p.integral_max_pad_acceleration
+        if abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration and \
+                abs(pad.turn_change_at(t)) <= p.integral_max_pad_acceleration:
+            self.steady_since = t if self.steady_since is None else self.steady_since
+        else:
+            self.steady_since = None
+        steady = self.steady_since is not None and t - self.steady_since >= p.integral_settle_time
         if accumulate and steady and np.hypot(*error) < p.integral_error_limit and p.integral_gain > 0.0:
             self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)

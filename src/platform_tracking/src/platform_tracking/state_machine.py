@@ -15,8 +15,10 @@ States and what the drone does in each (heights are above the pad, measured from
   and its speed steady, for ``gate_ready_time``: it then descends at ``final_descent_rate``, still tracking, and
   sends ``ardrone/land`` at ``land_height`` (the drone settles by itself, still obeying the horizontal
   command); an error above ``commit_abort_error`` before that, now or ``commit_abort_lookahead`` later at
-  the present relative velocity, calls the touchdown off. A gate not met
-  within ``gate_timeout``, or a touchdown called off, climbs back to ``retry_height`` to re-try.
+  the present relative velocity, calls the touchdown off, as does losing sight of the pad above
+  ``blind_height``. A touchdown called off with the pad in view waits at ``gate_height`` for the gate again
+  (``abort_to_gate``); a gate not met within ``gate_timeout``, or a touchdown called off with the pad out
+  of view, climbs back to ``retry_height`` to re-try.
 - RELOCATING: the pad has not been seen for ``lost_timeout``: climb to ``relocate_height`` for a
   wider view and fly to the last predicted position (following the prediction for as long as it
   reaches, then holding there); hover in place when nothing was ever predicted.
@@ -439,10 +441,26 @@ class TrackingStateMachine:
         error now, or the error commit_abort_lookahead from now at the present relative velocity (a pad that
         starts braking or turning during the descent is already drawing away)."""
         p, t = self.p, inp.time
+        # The camera loses the pad's centre marker only in the last decimetres; unseen higher up, the pad has
+        # left the narrow view (it brakes or turns while the prediction does not know yet).
+        unseen = inp.vision_age is None or inp.vision_age > p.gate_vision_age
+        reason = None
         if max(distance, distance_ahead) > p.commit_abort_error:
-            self._start_retry(t, "error %.2f m (%.2f m in %.2f s) > commit_abort_error %.2f m during the final "
-                              "descent" % (distance, distance_ahead, p.commit_abort_lookahead, p.commit_abort_error),
-                              height)
+            reason = "error %.2f m (%.2f m in %.2f s) > commit_abort_error %.2f m during the final descent" % (
+                distance, distance_ahead, p.commit_abort_lookahead, p.commit_abort_error)
+        elif unseen and height > p.blind_height:
+            reason = "pad not seen at %.2f m, above blind_height %.2f m, during the final descent" % (
+                height, p.blind_height)
+        if reason is not None:
+            seen = inp.vision_age is not None and inp.vision_age <= p.vision_timeout
+            if p.abort_to_gate and seen:
+                self.committed = False
+                self.retries += 1
+                self.at_gate_since = self.ready_since = None
+                self._event("touchdown %d called off: %s; back to the gate at %.2f m" % (
+                    self.retries, reason, p.gate_height))
+            else:
+                self._start_retry(t, reason, height)
             self._out.command = self._command(self._tracking_xy(t, inp.drone, self.last_pad), p.retry_climb_rate,
                                               inp.drone.yaw)
             return
