@@ -1,10 +1,11 @@
-"""The graph-connection check run_scenario waits on before it starts the physics: the pure part, and the
-same check against a real master with a publisher that connects late."""
+"""The graph-connection check run_scenario waits on before it starts the physics: the pure part, the same
+check against a real master with a publisher that connects late, and the second chance for a subscriber
+whose first connection attempt failed."""
 import subprocess
 import sys
 import time
 
-from mujoco_sim.isolated_ros import graph_unconnected, unconnected_subscriptions
+from mujoco_sim.isolated_ros import graph_unconnected, reconnect_subscribers, unconnected_subscriptions
 
 STATE = ([("/clock", ["/sim"]), ("/cmd", ["/tracker", "/joystick"])],
          [("/clock", ["/tracker", "/rec"]), ("/cmd", ["/sim"]), ("/nobody_publishes", ["/rec"])], [])
@@ -63,3 +64,46 @@ def test_a_real_subscriber_is_missing_until_the_publisher_connected_it(ros_maste
     finally:
         talker.terminate()
         talker.wait(timeout=30)
+
+
+# A talker whose node refuses the first requestTopic (as a publisher busy or not yet ready may fail it),
+# and says so on the parameter server.
+REFUSING_TALKER = """
+import rospy
+import rospy.impl.masterslave as masterslave
+from std_msgs.msg import String
+accept = masterslave.ROSHandler.requestTopic
+def refuse_once(self, caller_id, topic, protocols):
+    if not rospy.has_param("/refused"):
+        rospy.set_param("/refused", caller_id)
+        return -1, "refused once", 0
+    return accept(self, caller_id, topic, protocols)
+masterslave.ROSHandler.requestTopic = refuse_once
+rospy.init_node("refusing_talker")
+publisher = rospy.Publisher("chatter", String, queue_size=1)
+rospy.spin()
+"""
+
+
+def test_a_subscriber_whose_first_attempt_failed_connects_once_sent_its_publishers_again(ros_master):
+    proxy, env = ros_master
+    processes = [subprocess.Popen([sys.executable, "-c", REFUSING_TALKER], env=env, start_new_session=True)]
+    try:
+        deadline = time.monotonic() + 60
+        while "/chatter" not in {t for t, _ in proxy.getSystemState()[0]}:
+            assert time.monotonic() < deadline, "the talker never advertised"
+            time.sleep(0.05)
+        processes.append(subprocess.Popen([sys.executable, "-c", LISTENER], env=env, start_new_session=True))
+        while not proxy.hasParam("/refused"):
+            assert time.monotonic() < deadline, "the listener never asked the talker for the topic"
+            time.sleep(0.05)
+        missing = [m for m in graph_unconnected(proxy) if m[0] == "/chatter"]
+        assert missing == [("/chatter", "/refusing_talker", "/listener")]  # rospy does not try again by itself
+        assert reconnect_subscribers(proxy, missing) == [("/chatter", "/listener")]
+        while [m for m in graph_unconnected(proxy) if m[0] == "/chatter"]:
+            assert time.monotonic() < deadline, "the listener did not connect on the second chance"
+            time.sleep(0.05)
+    finally:
+        for process in processes:
+            process.terminate()
+            process.wait(timeout=30)

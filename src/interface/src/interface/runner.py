@@ -11,7 +11,7 @@ import sys
 import threading
 import time
 
-from mujoco_sim.isolated_ros import IsolatedLaunch, IsolatedProcess, graph_unconnected
+from mujoco_sim.isolated_ros import IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
 
 from . import scenario as scenario_mod
 from . import scoring
@@ -161,17 +161,25 @@ class FlightMonitor:
             return all("/flight_recorder" in subscribers.get(t, []) for t in self._needed_topics())
         self._wait(ready, "the flight recorder did not subscribe", time.monotonic() + timeout)
 
-    def wait_for_connections(self, timeout=120.0):
+    def wait_for_connections(self, timeout=120.0, retry_after=3.0):
         """Until every subscription in the graph is connected to its publishers. The simulator's
         lock-step only waits for nodes that have acknowledged once: a node whose inputs were still
         connecting at the start fell seconds behind (the supervisor then saw 'odometry missing' for 5 s
-        and refused the take-off, 1 run in 100)."""
+        and refused the take-off, 1 run in 100). A subscription still unconnected after ``retry_after``
+        seconds gets its publishers again (reconnect_subscribers), every ``retry_after`` seconds."""
         import rosgraph
         master = rosgraph.Master("/scenario_runner")
-        missing = []
+        missing, since = [], {}
 
         def connected():
             missing[:] = graph_unconnected(master)
+            now = time.monotonic()
+            stuck = [m for m in missing if now - since.setdefault(m, now) > retry_after]
+            if stuck:
+                for topic, subscriber in reconnect_subscribers(master, stuck):
+                    self.rospy.logwarn("%s had not connected to %s within %.0f s: sent its publishers again",
+                                       subscriber, topic, retry_after)
+                since.update((m, now) for m in stuck)
             return not missing
         try:
             self._wait(connected, "the graph did not connect", time.monotonic() + timeout)

@@ -1,5 +1,6 @@
 """Run a launch file under its own ROS master on a free port, so several runs can coexist; run more
-processes against that master; and check that every subscription in its graph is connected."""
+processes against that master; and check that every subscription in its graph is connected (and ask a
+subscriber that gave up on a publisher to try again)."""
 import os
 import random
 import signal
@@ -56,6 +57,10 @@ class _TimeoutTransport(xmlrpc.client.Transport):
         return connection
 
 
+def _node_api(master, node, timeout):
+    return xmlrpc.client.ServerProxy(master.lookupNode(node), transport=_TimeoutTransport(timeout))
+
+
 def graph_unconnected(master, timeout=2.0):
     """unconnected_subscriptions() of the graph behind ``master`` (a rosgraph.Master), asking every
     publishing node for its connections. A node that does not answer counts as connected to nobody."""
@@ -63,13 +68,29 @@ def graph_unconnected(master, timeout=2.0):
     outbound = {}
     for node in {n for _, nodes in state[0] for n in nodes}:
         try:
-            api = xmlrpc.client.ServerProxy(master.lookupNode(node), transport=_TimeoutTransport(timeout))
-            _, _, connections = api.getBusInfo("/graph_check")
+            _, _, connections = _node_api(master, node, timeout).getBusInfo("/graph_check")
         except Exception:  # gone or not answering yet: checked again on the next poll
             continue
         # Entries: (id, destination, direction, transport, topic, ...); a publisher's are outbound ('o').
         outbound[node] = {(c[4], c[1]) for c in connections if c[2] in ("o", "b")}
     return unconnected_subscriptions(state, outbound)
+
+
+def reconnect_subscribers(master, missing, timeout=2.0):
+    """Send each subscriber of ``missing`` (graph_unconnected's tuples) its topic's publishers again, as the
+    master does when they change (publisherUpdate). A rospy subscriber tries a new publisher once: if that
+    requestTopic fails, it never connects (one run in about 100 started without the tracker's cmd_vel
+    reaching the mux). Returns the (topic, subscriber) pairs that took the update."""
+    publishers = dict(master.getSystemState()[0])
+    sent = []
+    for topic, subscriber in sorted({(topic, subscriber) for topic, _, subscriber in missing}):
+        try:
+            uris = [master.lookupNode(node) for node in publishers.get(topic, [])]
+            _node_api(master, subscriber, timeout).publisherUpdate("/master", topic, uris)
+        except Exception:  # gone, or not answering: the next check finds it again
+            continue
+        sent.append((topic, subscriber))
+    return sent
 
 
 class IsolatedProcess:
