@@ -237,7 +237,7 @@ MeasurementOutcome PadMotionFilter::addTurnRate(double stamp, double turn_rate, 
   if (!std::isfinite(stamp) || !std::isfinite(turn_rate) || !isPositiveFinite(variance))
     return MeasurementOutcome::kDroppedInvalid;
   const double age = state_time_ - stamp;
-  const MeasurementOutcome usable = vehicleMeasurementUsable(stamp, age);
+  const MeasurementOutcome usable = vehicleMeasurementUsable(stamp, age, kHeadingMinSpeed);
   if (usable != MeasurementOutcome::kAccepted)
     return usable;
   // h(x) = s * kappa, linearised: dh/ds = kappa, dh/dkappa = s.
@@ -255,7 +255,8 @@ MeasurementOutcome PadMotionFilter::addSpeed(double stamp, const Eigen::Vector2d
   if (!std::isfinite(stamp) || !velocity_xy.allFinite() || !isPositiveFinite(variance))
     return MeasurementOutcome::kDroppedInvalid;
   const double age = state_time_ - stamp;
-  const MeasurementOutcome usable = vehicleMeasurementUsable(stamp, age);
+  // At any speed: a vehicle pulling away from rest (or not stopping there) is what it is most needed for.
+  const MeasurementOutcome usable = vehicleMeasurementUsable(stamp, age, 0.0);
   if (usable != MeasurementOutcome::kAccepted)
     return usable;
   // The speed along the heading at `stamp` (negative when reversing): h(x) = s - a * age. The velocity's
@@ -270,7 +271,7 @@ MeasurementOutcome PadMotionFilter::addSpeed(double stamp, const Eigen::Vector2d
   return MeasurementOutcome::kAccepted;
 }
 
-MeasurementOutcome PadMotionFilter::vehicleMeasurementUsable(double stamp, double age) const
+MeasurementOutcome PadMotionFilter::vehicleMeasurementUsable(double stamp, double age, double min_speed) const
 {
   if (!isTracking(stamp) || form_ != Model::Form::kPolar)
     return MeasurementOutcome::kIgnored;
@@ -279,7 +280,7 @@ MeasurementOutcome PadMotionFilter::vehicleMeasurementUsable(double stamp, doubl
   Model::Vector combined;
   Model::Matrix combined_P;
   combine(x_, P_, mode_probabilities_, combined, combined_P);
-  if (!(std::abs(combined(Model::kSpeed)) > kHeadingMinSpeed))
+  if (!(std::abs(combined(Model::kSpeed)) >= min_speed))
     return MeasurementOutcome::kIgnored;
   return MeasurementOutcome::kAccepted;
 }

@@ -473,7 +473,7 @@ double stopAndGoVelocityError(bool speed, unsigned seed)
 }
 
 // The fixes show a change of speed only once it has moved the pad; the vehicle's own velocity shows it
-// sooner. (In the simulator, stop and go at 3 m/s: p95 of the velocity error 0.31-0.39 -> 0.28 m/s.)
+// sooner, also at rest (a vehicle that pulls away again instead of stopping).
 TEST(Speed, TheReportedVelocityFollowsChangesOfSpeedSooner)
 {
   PadMotionFilter filter{ FilterParameters{} };
@@ -485,7 +485,7 @@ TEST(Speed, TheReportedVelocityFollowsChangesOfSpeedSooner)
     const double without = stopAndGoVelocityError(false, seed), with = stopAndGoVelocityError(true, seed);
     std::printf("[ stats    ] seed %u: velocity error RMS in the 0.5 s after a change of the ramp %.3f m/s vision "
                 "only, %.3f m/s with the vehicle's velocity\n", seed, without, with);
-    EXPECT_LT(with, 0.95 * without) << "seed " << seed;
+    EXPECT_LT(with, 0.9 * without) << "seed " << seed;
   }
 }
 

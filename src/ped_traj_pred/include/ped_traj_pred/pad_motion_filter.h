@@ -198,8 +198,8 @@ public:
   /// variance per axis [m^2/s^2]: its component along the track's heading is the speed s. The fixes see a
   /// change of speed (braking, pulling away) only once it has moved the pad, and not at all while the pad
   /// is out of the camera's view; this sees it at once. Applied to the current state through the
-  /// acceleration over the age, widened by kSpeedJerkStd. Not a fix, and kIgnored, kDroppedStale as
-  /// addTurnRate (at rest the heading, which it is projected on, may be unknown).
+  /// acceleration over the age, widened by kSpeedJerkStd. Not a fix. kIgnored without a polar track (the
+  /// velocity is projected on its heading), at any speed; kDroppedStale as addTurnRate.
   MeasurementOutcome addSpeed(double stamp, const Eigen::Vector2d& velocity_xy, double variance);
   static constexpr double kSpeedJerkStd = 2.0;  ///< [m/s^3]
 
@@ -267,8 +267,8 @@ private:
   /// Acquires or gives up the heading (polar / Cartesian form) by its uncertainty.
   void updateForm();
   /// addTurnRate and addSpeed: kAccepted if a vehicle measurement at `stamp`, `age` older than the state,
-  /// can be fused now.
-  MeasurementOutcome vehicleMeasurementUsable(double stamp, double age) const;
+  /// can be fused now, the track's speed being at least `min_speed` [m/s].
+  MeasurementOutcome vehicleMeasurementUsable(double stamp, double age, double min_speed) const;
   /// Scalar update of each mode with (H, innovation) = linearise(mode state) and variance R; each mode's
   /// likelihood of it re-weights the modes.
   template <class Linearise>
