@@ -134,7 +134,7 @@ def corner_prediction(t0, turn_at, speed=3.0, radius=2.0):
 
 def test_integral_is_frozen_while_the_pad_turns_in():
     """Entering a turn (the corner of a square) the error is a transient, like a braking."""
-    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0, integral_settle_time=0.0)
+    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0, integral_turn_settle_time=0.0)
     controller = TrackingController(params)
     for k in range(10):  # the corner 0.5 s .. 0.05 s ahead, the drone 0.3 m behind the pad
         t = k * 0.05
@@ -163,29 +163,40 @@ def test_the_integral_is_kept_along_and_across_the_pads_travel():
         velocity = speed * np.array([math.cos(angle), math.sin(angle)])
         pad = PadPrediction(t, path[0], (*velocity, 0.0), times, path)
         controller.world_velocity(t, drone(*(pad_xy + 0.2 * outward), *velocity), pad)
-    # All of it across the travel, pointing inwards (left of +x travel is +y): 0.2 m for 10 s, less the
-    # first integral_settle_time.
-    assert controller.integral == pytest.approx((0.0, 0.2 * (10.0 - params.integral_settle_time)), abs=0.05)
+    # All of it across the travel, pointing inwards (left of +x travel is +y): 0.2 m for 10 s.
+    assert controller.integral == pytest.approx((0.0, 2.0), abs=0.05)
 
 
-def test_after_a_corner_the_integral_waits_integral_settle_time():
+def test_after_a_corner_the_integral_waits_integral_turn_settle_time_but_not_after_a_reversal():
     """The drone overshoots as the pad leaves a corner: a transient, not a deficit to integrate (on a
     square at 3 m/s it kept the drone 0.13 m beside the pad along the next side)."""
-    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0, integral_settle_time=1.0)
+    params = TrackingParams(lookahead=0.0, velocity_lead=0.0, integral_gain=1.0, integral_turn_settle_time=1.0)
     controller = TrackingController(params)
     for k in range(10):  # in the corner's onset: no integration
         t = k * 0.05
         controller.world_velocity(t, drone(x=-0.3, vx=3.0), corner_prediction(t, turn_at=0.5))
     straight = corner_prediction(0.0, turn_at=100.0)  # then a straight: the drone 0.3 m to its right
     t = 0.5
-    while t < 0.5 + params.integral_settle_time - 0.1:
+    while t < 0.5 + params.integral_turn_settle_time - 0.1:
         controller.world_velocity(t, drone(x=3.0 * t, y=-0.3, vx=3.0), straight)
         t += 0.05
     assert controller.integral == pytest.approx((0.0, 0.0))
-    while t < 0.5 + params.integral_settle_time + 0.5:
+    while t < 0.5 + params.integral_turn_settle_time + 0.5:
         controller.world_velocity(t, drone(x=3.0 * t, y=-0.3, vx=3.0), straight)
         t += 0.05
     assert controller.integral[1] > 0.05  # then it integrates the error across the travel
+    # Back and forth: the pad pulls away backwards at 3 m/s^2 (no integration), then runs steadily at
+    # -3 m/s, the drone 0.3 m short of it: integrated at once, not integral_turn_settle_time later.
+    reversing = TrackingController(params)
+    for k in range(20):
+        t = k * 0.05
+        reversing.world_velocity(t, drone(x=-1.5 * t * t + 0.3), accelerating_prediction(t, -1.5 * t * t, -3.0 * t, -3.0))
+    assert reversing.integral == pytest.approx((0.0, 0.0))
+    for k in range(20, 30):
+        t = k * 0.05
+        reversing.world_velocity(t, drone(x=-1.5 - 3.0 * (t - 1.0) + 0.3, vx=-3.0),
+                                 accelerating_prediction(t, -1.5 - 3.0 * (t - 1.0), -3.0, 0.0))
+    assert reversing.integral[0] == pytest.approx(0.3 * 0.45, abs=0.03)  # along the travel: 0.3 m for 0.45 s
 
 
 def test_without_a_path_the_acceleration_is_fed_forward_on_a_turn():

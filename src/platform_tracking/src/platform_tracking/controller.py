@@ -143,7 +143,7 @@ class TrackingController:
         # short by on a turn (drag, its own loop's lag) is constant there, while in the world it rotates.
         self.integral = np.zeros(2)
         self.travel_heading = 0.0     # direction of the pad's velocity, kept while it stands still [rad]
-        self.steady_since = None      # since when the pad's motion has been steady enough to integrate [s]
+        self.turn_changed_at = None   # when the pad last entered or left a turn [s]
         self.last_time = None
         self.velocity_history = collections.deque()  # (stamp, pad velocity) of recent predictions
         self.acceleration = np.zeros(2)
@@ -152,7 +152,7 @@ class TrackingController:
         """Forget the integral (on entering a state where it would be stale)."""
         self.integral[:] = 0.0
         self.last_time = None
-        self.steady_since = None
+        self.turn_changed_at = None
 
     def errors(self, t, drone: DroneState, pad: PadPrediction):
         """(error now, relative velocity now): horizontal pad minus drone, world frame."""
@@ -207,12 +207,14 @@ class TrackingController:
             self.travel_heading = float(np.arctan2(pad_velocity[1], pad_velocity[0]))
         c, s = np.cos(self.travel_heading), np.sin(self.travel_heading)
         to_world = np.array([[c, -s], [s, c]])
-        if abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration and \
-                abs(pad.turn_change_at(t)) <= p.integral_max_pad_acceleration:
-            self.steady_since = t if self.steady_since is None else self.steady_since
-        else:
-            self.steady_since = None
-        steady = self.steady_since is not None and t - self.steady_since >= p.integral_settle_time
+        turn_change = abs(pad.turn_change_at(t)) > p.integral_max_pad_acceleration
+        if turn_change:
+            self.turn_changed_at = t
+        # After a corner the drone overshoots across the pad's travel for about a second: a transient too.
+        # (Not after a change of speed: on a reversal the travel frame turns round, and the integral that
+        # holds against the wind must be re-learnt at once.)
+        settled = self.turn_changed_at is None or t - self.turn_changed_at >= p.integral_turn_settle_time
+        steady = settled and not turn_change and abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration
         if accumulate and steady and np.hypot(*error) < p.integral_error_limit and p.integral_gain > 0.0:
             self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)

@@ -106,7 +106,7 @@ class TrackingParams:
     integral_speed_limit: float = spec(2.0, 0.0, 20.0, "m/s")
     integral_error_limit: float = spec(2.0, 0.0, 100.0, "m")
     integral_max_pad_acceleration: float = spec(0.5, 0.0, 100.0, "m/s^2")
-    integral_settle_time: float = spec(1.0, 0.0, 60.0, "s")
+    integral_turn_settle_time: float = spec(1.0, 0.0, 60.0, "s")
     lookahead: float = spec(0.3, 0.0, 5.0, "s")
     velocity_lead: float = spec(0.15, 0.0, 5.0, "s")
     acceleration_window: float = spec(0.5, 0.0, 10.0, "s")
