@@ -142,7 +142,7 @@ class TrackingParams:
     gate_max_speed_change: float = spec(1.2, 0.0, 50.0, "m/s^2")
     gate_max_speed_change_change: float = spec(0.3, 0.0, 50.0, "m/s^2")
     final_descent_rate: float = spec(1.0, 0.05, 3.0, "m/s")
-    land_height: float = spec(0.12, 0.0, 5.0, "m")
+    land_height: float = spec(0.06, 0.0, 5.0, "m")
     commit_abort_error: float = spec(0.2, 0.01, 5.0, "m")
     commit_abort_lookahead: float = spec(0.3, 0.0, 2.0, "s")
     abort_to_gate: bool = spec(True)
