@@ -439,7 +439,9 @@ class TrackingStateMachine:
         """Committed: the last few decimetres at final_descent_rate while tracking, so the pad has little
         time to move unseen; ardrone/land at land_height. Until then a growing error still calls it off: the
         error now, or the error commit_abort_lookahead from now at the present relative velocity (a pad that
-        starts braking or turning during the descent is already drawing away)."""
+        starts braking or turning during the descent is already drawing away), and so does the pad unseen
+        above blind_height. Called off, the drone waits at the gate (abort_to_gate, the pad in view) or
+        climbs to retry_height."""
         p, t = self.p, inp.time
         # The camera loses the pad's centre marker only in the last decimetres; unseen higher up, the pad has
         # left the narrow view (it brakes or turns while the prediction does not know yet).
@@ -452,8 +454,8 @@ class TrackingStateMachine:
             reason = "pad not seen at %.2f m, above blind_height %.2f m, during the final descent" % (
                 height, p.blind_height)
         if reason is not None:
-            seen = inp.vision_age is not None and inp.vision_age <= p.vision_timeout
-            if p.abort_to_gate and seen:
+            in_view = inp.vision_age is not None and inp.vision_age <= p.vision_timeout  # lost only briefly
+            if p.abort_to_gate and in_view:
                 self.committed = False
                 self.retries += 1
                 self.at_gate_since = self.ready_since = None
