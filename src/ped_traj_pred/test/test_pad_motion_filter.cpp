@@ -462,7 +462,8 @@ double stopAndGoVelocityError(bool speed, unsigned seed)
         filter.addSpeed(t, trajectory.velocity(k) + 0.1 * Eigen::Vector2d(unit(rng), unit(rng)), 0.01);
     }
     filter.addVision(t, trajectory.position(k) + 0.03 * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)), 9e-4);
-    const bool after_change = std::any_of(changes.begin(), changes.end(), [t](double c) { return t >= c && t < c + 0.5; });
+    const bool after_change =
+        std::any_of(changes.begin(), changes.end(), [t](double c) { return t >= c && t < c + 0.5; });
     if (t > 5.0 && after_change)
     {
       squared_sum += (filter.stateAt(t)->velocity.head<2>() - trajectory.velocity(k)).squaredNorm();

@@ -190,7 +190,8 @@ def test_after_a_corner_the_integral_waits_integral_turn_settle_time_but_not_aft
     reversing = TrackingController(params)
     for k in range(20):
         t = k * 0.05
-        reversing.world_velocity(t, drone(x=-1.5 * t * t + 0.3), accelerating_prediction(t, -1.5 * t * t, -3.0 * t, -3.0))
+        reversing.world_velocity(t, drone(x=-1.5 * t * t + 0.3),
+                                 accelerating_prediction(t, -1.5 * t * t, -3.0 * t, -3.0))
     assert reversing.integral == pytest.approx((0.0, 0.0))
     for k in range(20, 30):
         t = k * 0.05
