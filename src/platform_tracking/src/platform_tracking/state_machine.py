@@ -405,7 +405,7 @@ class TrackingStateMachine:
                 self.at_gate_since = t if self.at_gate_since is None or (on_target and not steady) \
                     else self.at_gate_since
                 if t - self.at_gate_since > p.gate_timeout:
-                    self._start_retry(t, "not inside the touchdown gate for %.1f s (error %.2f m, relative speed "
+                    self._start_retry("not inside the touchdown gate for %.1f s (error %.2f m, relative speed "
                                       "%.2f m/s)" % (p.gate_timeout, distance, relative_speed), height)
         else:
             self.at_gate_since = self.ready_since = None
@@ -428,12 +428,18 @@ class TrackingStateMachine:
             vz = 0.0  # outside the descent cone: hold the height, let the tracking catch up
         self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
 
-    def _start_retry(self, t, reason, height):
-        self.retrying = True
+    def _start_retry(self, reason, height, climb=True):
+        """A new attempt at the gate: after a climb to retry_height, or (``climb`` False) from where the drone is."""
+        self.retrying = climb
         self.committed = False
         self.retries += 1
         self.at_gate_since = self.ready_since = None
-        self._event("re-try %d: %s; climbing from %.2f m to %.2f m" % (self.retries, reason, height, self.p.retry_height))
+        if climb:
+            self._event("re-try %d: %s; climbing from %.2f m to %.2f m" % (self.retries, reason, height,
+                                                                           self.p.retry_height))
+        else:
+            self._event("touchdown %d called off: %s; back to the gate at %.2f m" % (self.retries, reason,
+                                                                                   self.p.gate_height))
 
     def _fast_descent(self, inp, distance, distance_ahead, height):
         """Committed: the last few decimetres at final_descent_rate while tracking, so the pad has little
@@ -455,14 +461,7 @@ class TrackingStateMachine:
                 height, p.blind_height)
         if reason is not None:
             in_view = inp.vision_age is not None and inp.vision_age <= p.vision_timeout  # lost only briefly
-            if p.abort_to_gate and in_view:
-                self.committed = False
-                self.retries += 1
-                self.at_gate_since = self.ready_since = None
-                self._event("touchdown %d called off: %s; back to the gate at %.2f m" % (
-                    self.retries, reason, p.gate_height))
-            else:
-                self._start_retry(t, reason, height)
+            self._start_retry(reason, height, climb=not (p.abort_to_gate and in_view))
             self._out.command = self._command(self._tracking_xy(t, inp.drone, self.last_pad), p.retry_climb_rate,
                                               inp.drone.yaw)
             return
