@@ -18,7 +18,10 @@ def model(vehicle="summit_xl"):
     return os.path.join(PKG, "models", "world_%s.xml" % vehicle)
 
 
-def make_sim(vehicle="summit_xl", seed=1, **overrides):
+def make_sim(vehicle="summit_xl", seed=1, realism="ideal", **overrides):
+    """A world of the given realism profile; these tests of the physics and the autopilot use the ideal one
+    (true state, no latency) unless they say otherwise."""
+    overrides.setdefault("realism", {"profile": realism})
     return Simulator(load_sim_config(CONFIG, overrides), model(vehicle), vehicle, seed)
 
 

@@ -50,7 +50,7 @@ class FlightTest(unittest.TestCase):
         self.assertEqual(estimates[-1].child_frame_id, "ardrone/base_link")
         stamps = [m.header.stamp.to_sec() for m in estimates]
         span = stamps[-1] - stamps[0]
-        self.assertGreater(len(stamps) / span, 0.8 * rospy.get_param("/mujoco_sim/rates/imu_hz"))
+        self.assertGreater(len(stamps) / span, 0.8 * rospy.get_param("/mujoco_sim/realism_in_force/navdata_rate_hz"))
         # Horizontal error of the estimate against the ground truth of the same instant, over the flight.
         errors = [math.hypot(m.pose.pose.position.x - truth[k].x, m.pose.pose.position.y - truth[k].y)
                   for m in estimates for k in [round(m.header.stamp.to_sec(), 3)] if k in truth]

@@ -10,7 +10,8 @@ Two kinds of acknowledgement:
 - a topic the simulator publishes (``input`` = its resolved name, ``period`` = 0): the sender has
   processed that topic's messages up to ``stamp``. The gate blocks once a message published more than
   ``max_lead`` ago is still unacknowledged, so a topic that is not being published (camera blackout)
-  never blocks.
+  never blocks. A message is stamped when it was measured and may be published later (a link's latency):
+  the lead counts from its publication.
 - a timer-driven step (``input`` = ``/clock``, ``period`` > 0): the sender stepped at ``stamp`` and
   steps again at ``stamp + period``; the gate blocks beyond ``stamp + period + max_lead``.
 
@@ -51,8 +52,9 @@ class LockstepGate:
         self.log = log
         self._lock = threading.Lock()
         self._senders: Dict[Tuple[str, str], _Sender] = {}
-        # Stamps published on acknowledged topics that may still be unacknowledged, oldest first.
-        self._published: Dict[str, Deque[float]] = {}
+        # (stamp, sim time of publication) of messages on acknowledged topics that may still be
+        # unacknowledged, oldest first.
+        self._published: Dict[str, Deque[Tuple[float, float]]] = {}
         self._blocked_since: Dict[Tuple[str, str], float] = {}
         self.acknowledged = threading.Event()  # set on every acknowledgement: a waiting loop wakes up
 
@@ -66,12 +68,12 @@ class LockstepGate:
                 self._published.setdefault(input_topic, collections.deque(maxlen=256))
         self.acknowledged.set()
 
-    def published(self, topic: str, stamp: float):
-        """The simulator published a message stamped ``stamp`` on ``topic``; only topics someone
-        acknowledges are remembered."""
+    def published(self, topic: str, stamp: float, at: Optional[float] = None):
+        """The simulator published a message stamped ``stamp`` on ``topic`` at sim time ``at`` (default: the
+        stamp); only topics someone acknowledges are remembered."""
         stamps = self._published.get(topic)
         if stamps is not None:
-            stamps.append(stamp)
+            stamps.append((stamp, stamp if at is None else at))
 
     def waits_for(self, topic: str) -> bool:
         return topic in self._published
@@ -106,11 +108,12 @@ class LockstepGate:
                 stamps.clear()
                 continue
             slowest = min(acks)
-            while stamps and stamps[0] <= slowest + 1e-6:
+            while stamps and stamps[0][0] <= slowest + 1e-6:
                 stamps.popleft()
 
     def _lag(self, input_topic, sender, sim_time):
         if sender.period > 0.0:
             return sim_time - (sender.stamp + sender.period)
-        oldest_unacknowledged = next((s for s in self._published[input_topic] if s > sender.stamp + 1e-6), None)
+        oldest_unacknowledged = next((at for stamp, at in self._published[input_topic] if stamp > sender.stamp + 1e-6),
+                                     None)
         return 0.0 if oldest_unacknowledged is None else sim_time - oldest_unacknowledged

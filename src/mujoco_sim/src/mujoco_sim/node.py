@@ -1,7 +1,11 @@
 """ROS wrapper of the simulator: parameters in, commands in, /clock, sensors, ground truth and tf out.
 
 All stamps are sim time computed here (this node is the clock source), so it never waits on /clock.
+What the drone sends (camera frames; navdata with the IMU and sonar; GPS; and the vehicle's GPS) is
+stamped when it is measured and published once its link's latency has passed, or never if the link
+loses it (the realism profile, realism.py); the resolved profile is on ~realism_in_force.
 """
+import copy
 import json
 import math
 import queue
@@ -81,7 +85,14 @@ class SimNode:
         self._init_subscribers()
         rates = self.cfg["rates"]
         self.schedules = {name: Schedule(rates[name + "_hz"]) for name in (
-            "clock", "imu", "ground_truth", "sonar", "altimeter", "gps", "navdata", "joint_states", "tf", "conditions")}
+            "clock", "ground_truth", "sonar", "altimeter", "gps", "joint_states", "tf", "conditions")}
+        realism = self.cfg["realism"]["values"]
+        self.schedules["imu"] = Schedule(realism["navdata_rate_hz"])
+        self.schedules["navdata"] = Schedule(realism["navdata_rate_hz"])
+        # Links of what the drone sends, in the order they are released within a step.
+        self.links = (self.sim.navdata_link, self.sim.gps_link, self.sim.camera_link)
+        rospy.set_param("~realism_in_force", dict(realism, profile=self.cfg["realism"]["profile"]))
+        rospy.loginfo("realism profile %s: %s", self.cfg["realism"]["profile"], json.dumps(realism))
         self.schedules["camera"] = Schedule(self.cfg["camera"]["rate_hz"])
         self.schedules["vehicle_gps"] = Schedule(self.sim.vehicle_cfg["gps_rate_hz"])
         self.schedules["stats"] = Schedule(0.2)
@@ -146,7 +157,7 @@ class SimNode:
             self._transform("summit_xl/base_link", "landing_pad", pad_offset, (1.0, 0.0, 0.0, 0.0), 0.0)])
         width, height, fx, fy, cx, cy = self.sim.camera_intrinsics()
         self.camera_info = CameraInfo(width=width, height=height, distortion_model="plumb_bob",
-                                      D=[0.0] * 5, K=[fx, 0, cx, 0, fy, cy, 0, 0, 1],
+                                      D=self.sim.camera_distortion(), K=[fx, 0, cx, 0, fy, cy, 0, 0, 1],
                                       R=[1, 0, 0, 0, 1, 0, 0, 0, 1], P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])
         self.camera_info.header.frame_id = "ardrone/bottom_camera"
 
@@ -260,22 +271,27 @@ class SimNode:
         if due["conditions"]:
             self._sync_conditions()
         if due["camera"] and self.cfg["camera"]["enabled"] and not self.sim.camera_blacked_out() and \
-                (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()):
-            self._publish_camera(stamp)
+                (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()) and \
+                not self.sim.camera_frame_lost():
+            self._capture_camera(stamp)
         if due["imu"] and self.pub_imu.get_num_connections():
-            self._publish_imu(stamp)
+            self._send(self.sim.navdata_link, self._imu_message(stamp), self.pub_imu)
         if due["sonar"] and self.pub_sonar.get_num_connections():
-            self._publish_sonar(stamp)
+            self._send(self.sim.navdata_link, self._sonar_message(stamp), self.pub_sonar)
         if due["altimeter"]:
             self._publish_altimeter(stamp)
         if due["ground_truth"]:
             self._publish_ground_truth(stamp)
         if due["gps"] and self.pub_gps.get_num_connections():
-            self._publish_gps(stamp)
+            self._send(self.sim.gps_link, self._gps_message(stamp), self.pub_gps)
         if due["vehicle_gps"] and self.pub_vehicle_gps.get_num_connections():
-            self._publish_vehicle_gps(stamp)
+            self._send(self.sim.gps_link, self._vehicle_gps_message(stamp), self.pub_vehicle_gps)
         if due["navdata"]:
-            self._publish_navdata(stamp)
+            self._send(self.sim.navdata_link, self._navdata_message(stamp), self.pub_navdata)
+        for link in self.links:
+            if link.pending:
+                for publish in link.due(t):
+                    publish()
         if due["joint_states"] and self.pub_joints.get_num_connections():
             self.pub_joints.publish(JointState(
                 header=self._header(stamp, ""), name=WHEEL_JOINTS,
@@ -290,7 +306,18 @@ class SimNode:
 
     def _published(self, publisher, stamp):
         if self.lockstep is not None:
-            self.lockstep.published(publisher.resolved_name, stamp.to_sec())
+            self.lockstep.published(publisher.resolved_name, stamp.to_sec(), self.sim.time)
+
+    def _send(self, link, message, publisher):
+        """Publish ``message`` once ``link`` delivers it (None: nothing was measured, e.g. a GPS dropout; a
+        message the link loses is never published)."""
+        if message is None or (link.loss > 0.0 and link.lost_next()):
+            return
+
+        def publish():
+            publisher.publish(message)
+            self._published(publisher, message.header.stamp)
+        link.push(self.sim.time, publish)
 
     @staticmethod
     def _header(stamp, frame):
@@ -346,19 +373,24 @@ class SimNode:
                 rospy.set_param("/drone_battery", level)
                 self.battery_written = level
 
-    def _publish_camera(self, stamp):
+    def _capture_camera(self, stamp):
+        """Render the frame now (its capture time is its stamp); it is published when the link delivers it."""
         t0 = time.perf_counter()
         image = self.sim.render_camera()
         self.timing["render"] += time.perf_counter() - t0
         msg = Image(header=self._header(stamp, "ardrone/bottom_camera"), height=image.shape[0],
                     width=image.shape[1], encoding="rgb8", is_bigendian=0, step=image.shape[1] * 3,
                     data=image.tobytes())
-        self.pub_image.publish(msg)
-        self._published(self.pub_image, stamp)
-        self.camera_info.header.stamp = stamp
-        self.pub_info.publish(self.camera_info)
+        info = copy.copy(self.camera_info)
+        info.header = self._header(stamp, self.camera_info.header.frame_id)
 
-    def _publish_imu(self, stamp):
+        def publish():
+            self.pub_image.publish(msg)
+            self._published(self.pub_image, stamp)
+            self.pub_info.publish(info)
+        self.sim.camera_link.push(self.sim.time, publish)
+
+    def _imu_message(self, stamp):
         quat, gyro, accel = self.sim.imu()
         msg = Imu(header=self._header(stamp, "ardrone/base_link"))
         _quaternion_msg(msg.orientation, quat)
@@ -368,14 +400,13 @@ class SimNode:
         msg.orientation_covariance = _diag(math.radians(n["imu_orientation_std_deg"]) ** 2)
         msg.angular_velocity_covariance = _diag(n["imu_gyro_std"] ** 2)
         msg.linear_acceleration_covariance = _diag(n["imu_accel_std"] ** 2)
-        self.pub_imu.publish(msg)
-        self._published(self.pub_imu, stamp)
+        return msg
 
-    def _publish_sonar(self, stamp):
+    def _sonar_message(self, stamp):
         s = self.cfg["sensors"]
-        self.pub_sonar.publish(Range(header=self._header(stamp, "ardrone/base_link"), radiation_type=Range.ULTRASOUND,
-                                     field_of_view=0.35, min_range=s["sonar_min_range"], max_range=s["sonar_max_range"],
-                                     range=self.sim.sonar()))
+        return Range(header=self._header(stamp, "ardrone/base_link"), radiation_type=Range.ULTRASOUND,
+                     field_of_view=0.35, min_range=s["sonar_min_range"], max_range=s["sonar_max_range"],
+                     range=self.sim.sonar())
 
     def _publish_altimeter(self, stamp):
         altitude, pressure = self.sim.altimeter()
@@ -410,18 +441,24 @@ class SimNode:
             _fill_pose(msg.pose, self.sim.pad_position(), _yaw_quaternion(yaw))
             self.pub_gt_pad.publish(msg)
 
-    def _publish_gps(self, stamp):
-        position, velocity = self.sim.gps()
+    def _gps_message(self, stamp):
+        fix = self.sim.gps()
+        if fix is None:
+            return None  # a dropout
+        position, velocity = fix
         odom = Odometry(header=self._header(stamp, "world"), child_frame_id="ardrone/base_link")
         _fill_pose(odom.pose.pose, position, (1.0, 0.0, 0.0, 0.0))
         _fill_vector(odom.twist.twist.linear, velocity)
         n = self.cfg["noise"]
         odom.pose.covariance = _diag6(n["gps_position_std"] ** 2, 1e6)
         odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, 1e6)
-        self.pub_gps.publish(odom)
+        return odom
 
-    def _publish_vehicle_gps(self, stamp):
-        (x, y, yaw), (vx, vy), yaw_rate = self.sim.vehicle_gps()
+    def _vehicle_gps_message(self, stamp):
+        fix = self.sim.vehicle_gps()
+        if fix is None:
+            return None  # a dropout
+        (x, y, yaw), (vx, vy), yaw_rate = fix
         odom = Odometry(header=self._header(stamp, "world"), child_frame_id="summit_xl/base_link")
         _fill_pose(odom.pose.pose, (x, y, 0.0), _yaw_quaternion(yaw))
         _fill_vector(odom.twist.twist.linear, (vx, vy, 0.0))
@@ -429,9 +466,9 @@ class SimNode:
         n = self.cfg["noise"]
         odom.pose.covariance = _diag6(n["gps_position_std"] ** 2, math.radians(n["vehicle_heading_std_deg"]) ** 2)
         odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, n["vehicle_yaw_rate_std"] ** 2)
-        self.pub_vehicle_gps.publish(odom)
+        return odom
 
-    def _publish_navdata(self, stamp):
+    def _navdata_message(self, stamp):
         sim = self.sim
         _, quat = sim.drone_pose()
         w, x, y, z = quat
@@ -443,10 +480,10 @@ class SimNode:
         state = NAVDATA_STATE[sim.autopilot.mode]
         if state == Navdata.STATE_FLYING and abs(vx) < 0.1 and abs(vy) < 0.1 and sim.command.vx == sim.command.vy == 0:
             state = Navdata.STATE_HOVERING
-        self.pub_navdata.publish(Navdata(
+        return Navdata(
             header=self._header(stamp, "ardrone/base_link"), state=state, battery_percent=sim.battery.level,
             altitude=sonar if math.isfinite(sonar) else -1.0, vx=vx, vy=vy, vz=vz, rot_x=roll, rot_y=pitch,
-            rot_z=yaw, motor_thrust=float(sim.autopilot.motor_thrust.sum()) / sim.max_total_thrust))
+            rot_z=yaw, motor_thrust=float(sim.autopilot.motor_thrust.sum()) / sim.max_total_thrust)
 
     def _publish_tf(self, stamp):
         position, quat = self.sim.drone_pose()

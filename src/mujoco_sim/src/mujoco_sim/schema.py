@@ -1,5 +1,6 @@
 """The simulator's parameters: names, types, ranges and units (documented in config/sim.yaml)."""
-from .config import Param, load_yaml, validate
+from . import realism
+from .config import ConfigError, Param, load_yaml, validate
 
 F, I, B, S = float, int, bool, str
 
@@ -29,18 +30,28 @@ SIM_SCHEMA = {
         "height": Param(I, 16, 1080, "px"),
         "rate_hz": Param(F, 0.1, 120.0, "Hz"),
         "noise": Param(F, 0.0, 1.0),
+        "shadow_map_size": Param(I, 64, 4096, "px"),
+        "shadow_clip_m": Param(F, 0.5, 50.0, "m"),
     },
     "rates": {
         "clock_hz": Param(F, 10.0, 1000.0, "Hz"),
-        "imu_hz": Param(F, 1.0, 500.0, "Hz"),
         "ground_truth_hz": Param(F, 1.0, 500.0, "Hz"),
         "sonar_hz": Param(F, 1.0, 100.0, "Hz"),
         "altimeter_hz": Param(F, 1.0, 100.0, "Hz"),
         "gps_hz": Param(F, 0.1, 100.0, "Hz"),
-        "navdata_hz": Param(F, 1.0, 200.0, "Hz"),
         "joint_states_hz": Param(F, 1.0, 200.0, "Hz"),
         "tf_hz": Param(F, 1.0, 200.0, "Hz"),
         "conditions_hz": Param(F, 0.5, 50.0, "Hz"),
+    },
+    "firmware": {
+        "flow_rate_hz": Param(F, 1.0, 250.0, "Hz"),
+        "flow_gain": Param(F, 0.1, 100.0, "1/s"),
+        "height_gain": Param(F, 0.1, 100.0, "1/s"),
+        "climb_gain": Param(F, 0.1, 100.0, "1/s^2"),
+        "surface_step": Param(F, 0.01, 10.0, "m"),
+        "surface_step_time": Param(F, 0.0, 10.0, "s"),
+        "coverage_low": Param(F, 0.0, 1.0),
+        "coverage_high": Param(F, 0.0, 1.0),
     },
     "noise": {
         "enabled": Param(B),
@@ -111,8 +122,16 @@ SIM_SCHEMA = {
 
 
 def validate_sim_config(tree, source):
-    """Validate a parameter tree against SIM_SCHEMA; ConfigError names ``source`` and the key."""
+    """Validate a parameter tree against SIM_SCHEMA; ConfigError names ``source`` and the key. The realism
+    section becomes ``config["realism"] = {"profile": name, "values": {key: value}, "profiles": table}``."""
+    if not isinstance(tree, dict):
+        raise ConfigError("%s: expected a mapping of parameters, got %r" % (source, tree))
+    tree = dict(tree)
+    realism_tree = tree.pop("realism", None)
     config = validate(tree, SIM_SCHEMA, source)
+    config["realism"] = validate_realism(realism_tree, source)
+    if config["firmware"]["coverage_low"] >= config["firmware"]["coverage_high"]:
+        raise ConfigError("%s: parameter 'firmware/coverage_low' must be below 'firmware/coverage_high'" % source)
     start = config["drone"]["start_position"]
     if len(start) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in start):
         from .config import ConfigError
@@ -131,3 +150,24 @@ def load_sim_config(path, overrides=None):
         else:
             tree[section] = values
     return validate_sim_config(tree, path)
+
+
+def validate_realism(section, source):
+    """The ``realism`` section: the table of profiles, the profile in force and its overrides."""
+    if not isinstance(section, dict):
+        raise ConfigError("%s: parameter 'realism' is missing or not a mapping (expected profile, overrides, "
+                          "profiles, table; see config/sim.yaml)" % source)
+    unknown = sorted(set(section) - {"profile", "overrides", "profiles", "table"})
+    missing = sorted({"profile", "profiles", "table"} - set(section))
+    if unknown or missing:
+        raise ConfigError("%s: parameter 'realism': %s" % (source, "; ".join(
+            (["unknown key(s) " + ", ".join(unknown)] if unknown else []) +
+            (["missing key(s) " + ", ".join(missing)] if missing else []))))
+    table = realism.validate_table(section["table"], section["profiles"], source)
+    overrides = section.get("overrides") or {}
+    if not isinstance(overrides, dict):
+        raise ConfigError("%s: parameter 'realism/overrides' must be a mapping of realism keys, got %r" % (
+            source, overrides))
+    selection = dict(overrides, profile=section["profile"])
+    name, values = realism.resolve(table, selection, "%s: parameter 'realism'" % source)
+    return {"profile": name, "values": values, "profiles": table}

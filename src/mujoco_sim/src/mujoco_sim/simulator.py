@@ -1,6 +1,10 @@
 """The simulated world, ROS-free: physics, autopilot, vehicle drive, wind, battery, sensors, camera.
 
-Everything random draws from generators derived from one seed, so a run is reproducible.
+Everything random draws from generators derived from one seed, so a run is reproducible. How real the
+sensors and the drone's own firmware are is the realism profile (realism.py, config/sim.yaml): biases,
+drifting GPS errors, sonar outliers, lens, light and exposure, the firmware flying on its own estimate
+and the command link's latency and losses are modelled here; the latency of what the drone sends (camera,
+navdata, GPS) is the node's, which publishes late.
 """
 import logging
 import math
@@ -11,6 +15,8 @@ import numpy as np
 from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix, yaw_of
 from .config import ConfigError
 from .environment import Battery, Wind, aerodynamic_force
+from .firmware import FirmwareEstimator, footprint_coverage, surface_weight
+from .realism import DelayLine, Dropouts, GaussMarkov, RandomWalk
 
 LOG = logging.getLogger("mujoco_sim.simulator")
 
@@ -19,7 +25,12 @@ SURFACE_NAMES = {SURFACE_PAD: "pad", SURFACE_GROUND: "ground", SURFACE_VEHICLE: 
 # Optical frame (x right, y down, z forward) of the MuJoCo bottom camera, in the drone body frame.
 CAMERA_OPTICAL_IN_BODY = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 FOOT_CLEARANCE = 0.065  # base_link height above the surface the drone stands on [m]
-DRONE_GEOM_GROUP = 3    # the drone's own geoms, hidden from its bottom camera
+DRONE_GEOM_GROUP = 3    # the drone's own geoms, hidden from its bottom camera (it cannot see them) unless they
+                        # must cast their shadow
+# Random processes, each with its own generator derived from the seed (the first eight are the original ones).
+RNG_STREAMS = ("imu", "sonar", "altimeter", "gps", "camera", "wind", "vehicle_gps", "flow",
+               "imu_bias", "gps_error", "vehicle_gps_error", "gps_dropouts", "sonar_outlier", "command_link",
+               "light", "exposure", "flow_scale", "camera_link", "navdata_link", "gps_link")
 
 
 def classify_touchdown(surface, impact_speed, tilt_deg, crash_speed, crash_tilt_deg):
@@ -96,10 +107,12 @@ class Simulator:
         self.false_target_until = -1.0
         self.camera_blackout_until = -1.0
 
-        streams = np.random.SeedSequence(seed).spawn(8)
-        self.rng = {name: np.random.default_rng(s) for name, s in zip(
-            ("imu", "sonar", "altimeter", "gps", "camera", "wind", "vehicle_gps", "flow"), streams)}
+        # One generator per process, so that a new effect never shifts the draws of an older one.
+        streams = np.random.SeedSequence(seed).spawn(len(RNG_STREAMS))
+        self.rng = {name: np.random.default_rng(s) for name, s in zip(RNG_STREAMS, streams)}
         self.noise = config["noise"] if config["noise"]["enabled"] else None
+        self.realism_profile = config["realism"]["profile"]
+        self.realism = config["realism"]["values"]
 
         drone = config["drone"]
         rotors = []
@@ -129,7 +142,54 @@ class Simulator:
         self._takeoff_z = None
         self._renderer = None
         self.camera_frame = None
+        self.camera_fovy = float(m.cam_fovy[self.camera])  # of the published image; the render may be wider
+        self.vehicle_rectangle = _vehicle_top_rectangle(m, self.vehicle_body)
+        self._init_realism()
         self._place_at_start()
+
+    def _init_realism(self):
+        r, rng = self.realism, self.rng
+        self.gyro_bias = RandomWalk(rng["imu_bias"], r["gyro_bias_initial_std"], r["gyro_bias_walk"], 3)
+        self.accel_bias = RandomWalk(rng["imu_bias"], r["accel_bias_initial_std"], r["accel_bias_walk"], 3)
+        self.yaw_drift_rate = r["yaw_drift_rate_std"] * rng["imu_bias"].standard_normal()
+        self.yaw_drift_walk = RandomWalk(rng["imu_bias"], 0.0, r["yaw_drift_walk"])
+        self.biases_time = 0.0
+        self.gps_error = GaussMarkov(rng["gps_error"], r["gps_error_std"], r["gps_error_time_constant_s"], 3)
+        self.vehicle_gps_error = GaussMarkov(rng["vehicle_gps_error"], r["gps_error_std"],
+                                             r["gps_error_time_constant_s"], 2)
+        self.gps_error_time = self.vehicle_gps_error_time = 0.0
+        self.gps_outage = Dropouts(rng["gps_dropouts"], r["gps_dropouts_per_min"], r["gps_dropout_duration_s"])
+        self.vehicle_gps_outage = Dropouts(rng["gps_dropouts"], r["gps_dropouts_per_min"], r["gps_dropout_duration_s"])
+        self.command_link = DelayLine(rng["command_link"], r["command_latency_s"], r["command_latency_jitter_s"],
+                                      r["command_loss_rate"])
+        # What the drone sends: the node publishes through these (stamped when measured, released late).
+        self.camera_link = DelayLine(rng["camera_link"], r["camera_latency_s"], r["camera_latency_jitter_s"],
+                                     r["camera_drop_rate"])
+        self.navdata_link = DelayLine(rng["navdata_link"], r["navdata_latency_s"], r["navdata_latency_jitter_s"],
+                                      r["navdata_drop_rate"])
+        self.gps_link = DelayLine(rng["gps_link"], r["gps_latency_s"])
+        self.flow_scale = 1.0 + r["flow_scale_error_std"] * rng["flow_scale"].standard_normal()
+        self.firmware = FirmwareEstimator(self.cfg["firmware"]) if r["firmware_on_estimate"] else None
+        self.firmware_schedule = {"flow": 0.0, "sonar": 0.0}
+        self.surface_weight = 0.0  # how much the optical flow follows the vehicle (flow_surface_coupling)
+        # The sun: direction from its elevation and azimuth, each drawn within its spread from the seed.
+        light = rng["light"]
+        elevation = math.radians(min(90.0, r["sun_elevation_deg"] + r["sun_elevation_spread_deg"] *
+                                     light.uniform(-1.0, 1.0)))
+        azimuth = math.radians(r["sun_azimuth_deg"] + r["sun_azimuth_spread_deg"] * light.uniform(-1.0, 1.0))
+        towards_sun = np.array([math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
+                                math.sin(elevation)])
+        self.sun_direction = -towards_sun
+        m, sun = self.model, self._mj.mj_name2id(self.model, self._mj.mjtObj.mjOBJ_LIGHT, "sun")
+        if sun >= 0:
+            m.light_dir[sun] = self.sun_direction
+            m.light_pos[sun] = towards_sun  # 1 m back towards the sun: the drone is inside the shadow map's depth
+            m.light_diffuse[sun] = r["sun_intensity"]
+            m.light_castshadow[sun] = r["shadows"]
+        m.vis.headlight.active = int(r["ambient_light"] > 0.0)
+        m.vis.headlight.ambient[:] = r["ambient_light"]
+        m.vis.quality.shadowsize = self.cfg["camera"]["shadow_map_size"] if r["shadows"] else 0
+        m.vis.map.shadowclip = self.cfg["camera"]["shadow_clip_m"] / max(1e-6, float(m.stat.extent))
 
     # ----- set-up ------------------------------------------------------------------------------
     def _place_at_start(self):
@@ -172,14 +232,30 @@ class Simulator:
         return float(self.model.opt.timestep)
 
     def set_velocity_command(self, vx, vy, vz, yaw_rate):
-        """Returns None when accepted, else why the command was ignored (the drone then holds)."""
+        """Returns None when accepted, else why the command was ignored (the drone then holds). An accepted
+        command reaches the drone after the command link's latency, or is lost (realism)."""
         problem = VelocityCommand.problem((vx, vy, vz, yaw_rate))
         if problem:
-            self.command = HOLD
+            self._send(self._hold)
             return problem
-        self.command = VelocityCommand(vx, vy, vz, yaw_rate)
-        self.command_time = self.time
+        if self.command_link.loss > 0.0 and self.command_link.lost_next():
+            return None
+        self._send(lambda: self._apply_velocity_command(VelocityCommand(vx, vy, vz, yaw_rate)))
         return None
+
+    def _hold(self):
+        self.command = HOLD
+
+    def _apply_velocity_command(self, command):
+        self.command = command
+        self.command_time = self.time
+
+    def _send(self, action):
+        """Over the command link: now, or once its latency has passed (in step)."""
+        if self.command_link.latency <= 0.0 and self.command_link.jitter <= 0.0:
+            return action()
+        self.command_link.push(self.time, action)
+        return True
 
     def set_vehicle_command(self, speed, yaw_rate):
         problem = VelocityCommand.problem((speed, yaw_rate))
@@ -191,21 +267,30 @@ class Simulator:
         return None
 
     def takeoff(self):
+        """Take-off command; True when the drone took it (or, with a command latency, when it was sent)."""
+        return self._send(self._takeoff)
+
+    def _takeoff(self):
         if self.battery.empty:
             LOG.warning("take-off refused: the battery is empty")
             return False
         z = float(self.data.qpos[self.drone_qpos + 2])
-        if self.autopilot.takeoff(z):
+        # The climb is measured as the autopilot sees the height: its own estimate, if it flies on it.
+        flown_z = self.firmware.height if self.firmware is not None and self.firmware.ready else z
+        if self.autopilot.takeoff(flown_z):
             self._takeoff_z = z
             self.touchdown = None
             return True
         return False
 
     def land(self):
-        return self.autopilot.land()
+        return self._send(self.autopilot.land)
 
     def reset(self):
         """Back to the start, motors off, as after /ardrone/reset."""
+        return self._send(self._reset)
+
+    def _reset(self):
         self.autopilot.reset()
         self.touchdown = None
         if self.cfg["drone"]["start_on_pad"]:
@@ -238,6 +323,9 @@ class Simulator:
         omega = d.qvel[qv + 3:qv + 6]  # free joint angular velocity is in the body frame
 
         now = float(d.time)
+        if self.command_link.pending:
+            for action in self.command_link.due(now):
+                action()
         if now - self.command_time > self.cfg["drone"]["command_timeout"]:
             self.command = HOLD
         self.wind.step(dt)
@@ -246,7 +334,11 @@ class Simulator:
             d.xfrc_applied[self.drone_body, :3] = aerodynamic_force(self.wind.velocity(), velocity, self.drag_area)
         else:
             d.xfrc_applied[self.drone_body, :3] = 0.0
-        thrusts = self.autopilot.update(dt, position, velocity, quat, omega, self.command,
+        if self.firmware is not None:
+            flown_position, flown_velocity = self._firmware_step(now, dt, quat)
+        else:
+            flown_position, flown_velocity = position, velocity
+        thrusts = self.autopilot.update(dt, flown_position, flown_velocity, quat, omega, self.command,
                                         power_available=not self.battery.empty)
         d.ctrl[self.rotor_ctrl] = thrusts
         self._drive_vehicle(dt, now)
@@ -257,6 +349,61 @@ class Simulator:
         self.battery.step(dt, thrust_fraction, self.temperature, motors_on=airborne)
         if d.ncon:
             self._check_contacts(velocity)
+
+    def _firmware_step(self, now, dt, quat):
+        """The on-board estimate the autopilot flies on: (position with the estimated height above the
+        surface below as z, estimated velocity)."""
+        fw, r = self.firmware, self.realism
+        rotation = quat_to_matrix(quat)
+        self._step_biases(now)
+        specific_force = self.data.sensordata[self.accel_adr:self.accel_adr + 3] + self.accel_bias.value + \
+            self._noise("imu", (self.noise or {}).get("imu_accel_std", 0), 3)
+        fw.predict(dt, rotation @ specific_force - np.array([0.0, 0.0, 9.81]))
+        schedule = self.firmware_schedule
+        if now >= schedule["sonar"]:
+            period = 1.0 / self.cfg["rates"]["sonar_hz"]
+            schedule["sonar"] = now + period
+            distance = self.sonar()
+            height = (distance + FOOT_CLEARANCE) * max(0.5, rotation[2, 2]) if math.isfinite(distance) else None
+            fw.sonar(now, period, height, self.altimeter()[0])
+        if now >= schedule["flow"]:
+            period = 1.0 / self.cfg["firmware"]["flow_rate_hz"]
+            schedule["flow"] = now + period
+            fw.flow(period, self._flow_measurement(rotation))
+        position = self.data.qpos[self.drone_qpos:self.drone_qpos + 3].copy()
+        position[2] = fw.height if fw.height is not None else position[2]
+        return position, np.array([fw.velocity[0], fw.velocity[1], fw.climb])
+
+    def _flow_measurement(self, rotation):
+        """World-frame horizontal velocity the optical flow measures: relative to what the camera sees
+        (flow_surface_coupling), scaled by the run's scale error, noisy."""
+        velocity, _ = self.drone_velocity()
+        measured = velocity[:2].copy()
+        if self.realism["flow_surface_coupling"]:
+            self.surface_weight = self._surface_weight(rotation)
+            if self.surface_weight > 0.0:
+                measured -= self.surface_weight * np.array(self.vehicle_velocity()[:2])
+        std = (self.noise or {}).get("flow_velocity_std", 0)
+        return measured * self.flow_scale + self._noise("flow", std, 2)
+
+    def _surface_weight(self, rotation):
+        camera_position, _ = self.camera_pose_in_body()
+        position, _ = self.drone_pose()
+        width, height, fx, _, _, _ = self.camera_intrinsics()
+        x, y, yaw = self.vehicle_pose()
+        coverage = footprint_coverage(position + rotation @ camera_position, rotation @ CAMERA_OPTICAL_IN_BODY.T,
+                                      fx, width, height, float(self.data.site_xpos[self.pad_site][2]), (x, y), yaw,
+                                      self.vehicle_rectangle)
+        f = self.cfg["firmware"]
+        return surface_weight(coverage, f["coverage_low"], f["coverage_high"])
+
+    def _step_biases(self, now):
+        dt = now - self.biases_time
+        if dt > 0.0:
+            self.gyro_bias.step(dt)
+            self.accel_bias.step(dt)
+            self.yaw_drift_walk.step(dt)
+            self.biases_time = now
 
     def _drive_vehicle(self, dt, now):
         vc = self.vehicle_cfg
@@ -378,29 +525,64 @@ class Simulator:
         return self.rng[stream].normal(0.0, std, size)
 
     def imu(self):
-        """(orientation quaternion w,x,y,z; angular velocity body [rad/s]; specific force body [m/s^2])."""
+        """(orientation quaternion w,x,y,z; angular velocity body [rad/s]; specific force body [m/s^2]) as the
+        drone reports them: biased (realism), noisy, and the attitude estimate tilted by the accelerometer's
+        bias (it is levelled on it) and turned by the yaw drift."""
         n = self.noise or {}
-        gyro = self.data.sensordata[self.gyro_adr:self.gyro_adr + 3] + self._noise("imu", n.get("imu_gyro_std", 0), 3)
-        accel = self.data.sensordata[self.accel_adr:self.accel_adr + 3] + self._noise("imu", n.get("imu_accel_std", 0), 3)
+        self._step_biases(self.time)
+        gyro = self.data.sensordata[self.gyro_adr:self.gyro_adr + 3] + self.gyro_bias.value + \
+            self._noise("imu", n.get("imu_gyro_std", 0), 3)
+        accel = self.data.sensordata[self.accel_adr:self.accel_adr + 3] + self.accel_bias.value + \
+            self._noise("imu", n.get("imu_accel_std", 0), 3)
         _, quat = self.drone_pose()
-        tilt_noise = self._noise("imu", math.radians(n.get("imu_orientation_std_deg", 0)), 3)
-        if self.noise is not None:
-            half = 0.5 * tilt_noise
+        error = self._noise("imu", math.radians(n.get("imu_orientation_std_deg", 0)), 3)
+        error = error + np.array([self.accel_bias.value[1] / 9.81, -self.accel_bias.value[0] / 9.81, 0.0])
+        yaw_drift = self.yaw_drift()
+        if yaw_drift:
+            quat = _quat_multiply(np.array([math.cos(yaw_drift / 2), 0.0, 0.0, math.sin(yaw_drift / 2)]), quat)
+        if np.any(error):
+            half = 0.5 * error
             dq = np.array([1.0, half[0], half[1], half[2]])
             quat = _quat_multiply(quat, dq / np.linalg.norm(dq))
         return quat, gyro, accel
 
+    def yaw_drift(self):
+        """How far the reported yaw has drifted from the true one [rad] (realism)."""
+        return self.yaw_drift_rate * self.time + float(self.yaw_drift_walk.value[0])
+
     def sonar(self):
-        """Distance along the body -z axis to the first surface [m], +inf beyond the range."""
+        """Distance from the feet to the first surface below [m], +inf beyond the range: the nearest echo
+        within the beam (realism: a cone of sonar_beam_half_angle_deg around body -z, else that axis), and
+        now and then a spurious echo or none at all (sonar_outlier_rate)."""
         position, quat = self.drone_pose()
-        direction = -quat_to_matrix(quat)[:, 2]
+        rotation = quat_to_matrix(quat)
         geom = np.zeros(1, dtype=np.int32)
-        distance = self._mj.mj_ray(self.model, self.data, position, direction, None, 1, self.drone_body, geom)
         limit = self.cfg["sensors"]["sonar_max_range"]
-        if distance < 0 or distance > limit:
+        distances = []
+        for direction in self._sonar_rays(rotation):
+            distance = self._mj.mj_ray(self.model, self.data, position, direction, None, 1, self.drone_body, geom)
+            if 0 <= distance <= limit:
+                # The echo's range along the beam axis: a slanted ray reaches the same surface further away.
+                distances.append(distance * float(direction @ -rotation[:, 2]))
+        minimum = self.cfg["sensors"]["sonar_min_range"]
+        outliers = self.realism["sonar_outlier_rate"]
+        if outliers > 0.0 and self.rng["sonar_outlier"].random() < outliers:
+            if self.rng["sonar_outlier"].random() < 0.5:
+                return math.inf  # no echo
+            true_range = min(distances) - FOOT_CLEARANCE if distances else limit
+            return float(self.rng["sonar_outlier"].uniform(minimum, max(minimum, true_range)))  # an early echo
+        if not distances:
             return math.inf
-        return max(self.cfg["sensors"]["sonar_min_range"],
-                   distance - FOOT_CLEARANCE + self._noise("sonar", (self.noise or {}).get("sonar_std", 0)))
+        return max(minimum, min(distances) - FOOT_CLEARANCE + self._noise("sonar", (self.noise or {}).get("sonar_std", 0)))
+
+    def _sonar_rays(self, rotation):
+        down = -rotation[:, 2]
+        angle = math.radians(self.realism["sonar_beam_half_angle_deg"])
+        if angle <= 0.0:
+            return (down,)
+        c, s = math.cos(angle), math.sin(angle)
+        x, y = rotation[:, 0], rotation[:, 1]
+        return (down, c * down + s * x, c * down - s * x, c * down + s * y, c * down - s * y)
 
     def altimeter(self):
         """Barometric altitude above the world origin [m] and pressure [hPa]."""
@@ -410,65 +592,147 @@ class Simulator:
         return altitude, pressure
 
     def gps(self):
-        """GPS-like position and velocity of the drone, world frame, noisy."""
+        """GPS-like position and velocity of the drone, world frame: white noise plus the slowly drifting
+        error (realism); None during a dropout."""
+        if self.gps_outage.active(self.time):
+            return None
         position, _ = self.drone_pose()
         velocity, _ = self.drone_velocity()
         n = self.noise or {}
-        return (position + self._noise("gps", n.get("gps_position_std", 0), 3),
+        drift = self.gps_error.step(self.time - self.gps_error_time)
+        self.gps_error_time = self.time
+        return (position + drift + self._noise("gps", n.get("gps_position_std", 0), 3),
                 velocity + self._noise("gps", n.get("gps_velocity_std", 0), 3))
 
     def vehicle_gps(self):
-        """GPS-like pose (x, y, yaw), velocity (vx, vy) and yaw rate of the vehicle (its odometry), noisy."""
+        """GPS-like pose (x, y, yaw), velocity (vx, vy) and yaw rate of the vehicle (its odometry), noisy, the
+        position with its own drifting error; None during a dropout."""
+        if self.vehicle_gps_outage.active(self.time):
+            return None
         x, y, yaw = self.vehicle_pose()
         vx, vy, yaw_rate = self.vehicle_velocity()
         n = self.noise or {}
-        p = self._noise("vehicle_gps", n.get("gps_position_std", 0), 2)
+        drift = self.vehicle_gps_error.step(self.time - self.vehicle_gps_error_time)
+        self.vehicle_gps_error_time = self.time
+        p = self._noise("vehicle_gps", n.get("gps_position_std", 0), 2) + drift
         v = self._noise("vehicle_gps", n.get("gps_velocity_std", 0), 2)
         heading = self._noise("vehicle_gps", math.radians(n.get("vehicle_heading_std_deg", 0)))
         turn = self._noise("vehicle_gps", n.get("vehicle_yaw_rate_std", 0))
         return (x + p[0], y + p[1], yaw + heading), (vx + v[0], vy + v[1]), yaw_rate + turn
 
     def flow_velocity(self):
-        """Heading-frame velocity as the AR.Drone's optical flow reports it, noisy."""
-        velocity, _ = self.drone_velocity()
+        """Heading-frame velocity (forward, left, up) as the AR.Drone reports it in navdata: its firmware's
+        estimate (realism: firmware_on_estimate), else the velocity (relative to the surface the camera
+        sees, with flow_surface_coupling) with white noise."""
         _, quat = self.drone_pose()
-        yaw = yaw_of(quat_to_matrix(quat))
+        rotation = quat_to_matrix(quat)
+        yaw = yaw_of(rotation)
         c, s = math.cos(yaw), math.sin(yaw)
+        if self.firmware is not None:
+            vx, vy = self.firmware.velocity
+            return c * vx + s * vy, -s * vx + c * vy, self.firmware.climb
+        velocity, _ = self.drone_velocity()
         std = (self.noise or {}).get("flow_velocity_std", 0)
-        return (c * velocity[0] + s * velocity[1] + self._noise("flow", std),
-                -s * velocity[0] + c * velocity[1] + self._noise("flow", std),
+        horizontal = self._flow_measurement(rotation)
+        return (c * horizontal[0] + s * horizontal[1], -s * horizontal[0] + c * horizontal[1],
                 velocity[2] + self._noise("flow", std))
 
     # ----- camera ------------------------------------------------------------------------------
     def camera_intrinsics(self):
-        """(width, height, fx, fy, cx, cy) of the bottom camera in pixels."""
+        """(width, height, fx, fy, cx, cy) of the bottom camera's published image in pixels."""
         width, height = self.cfg["camera"]["width"], self.cfg["camera"]["height"]
-        fy = (height / 2.0) / math.tan(math.radians(float(self.model.cam_fovy[self.camera])) / 2.0)
+        fy = (height / 2.0) / math.tan(math.radians(self.camera_fovy) / 2.0)
         return width, height, fy, fy, (width - 1) / 2.0, (height - 1) / 2.0
+
+    def camera_distortion(self):
+        """plumb_bob coefficients (k1, k2, p1, p2, k3) of the lens (camera_info D)."""
+        r = self.realism
+        return [r["lens_k1"], r["lens_k2"], r["lens_p1"], r["lens_p2"], r["lens_k3"]]
+
+    def camera_frame_lost(self):
+        """Draw whether the frame due now is lost on the link (then it is not rendered at all)."""
+        return self.camera_link.loss > 0.0 and self.camera_link.lost_next()
 
     def camera_pose_in_body(self):
         """Optical-frame origin and rotation matrix in the drone body frame."""
         return self.model.cam_pos[self.camera].copy(), CAMERA_OPTICAL_IN_BODY
 
+    def _open_renderer(self):
+        from .camera_model import Exposure, Lens
+        r, cam = self.realism, self.cfg["camera"]
+        self.lens = Lens(self.camera_intrinsics(), self.camera_distortion())
+        self.model.cam_fovy[self.camera] = self.lens.render_fovy_deg  # wide enough for the distorted corners
+        self._renderer = self._mj.Renderer(self.model, cam["height"], cam["width"])
+        self._camera_view = self._mj.MjvOption()
+        # The drone's geoms lie outside the camera's view; they are in the scene only to cast their shadow.
+        self._camera_view.geomgroup[DRONE_GEOM_GROUP] = int(r["shadows"])
+        self._camera_view.sitegroup[:] = 0  # site markers are not part of the world a camera sees
+        self.exposure = Exposure(self.rng["exposure"], (cam["height"], cam["width"], 3), r["exposure_gain_std"],
+                                 r["exposure_time_constant_s"], r["pixel_noise_std"])
+
     def render_camera(self, noise_std=None):
-        """RGB image (height, width, 3) uint8 from the bottom camera."""
+        """RGB image (height, width, 3) uint8 from the bottom camera, as the real one delivers it (realism):
+        distorted by the lens, blurred by the motion during the exposure, its brightness wandering, noisy."""
         if self._renderer is None:
-            self._renderer = self._mj.Renderer(self.model, self.cfg["camera"]["height"], self.cfg["camera"]["width"])
-            self._camera_view = self._mj.MjvOption()
-            self._camera_view.geomgroup[DRONE_GEOM_GROUP] = 0
-            self._camera_view.sitegroup[:] = 0  # site markers are not part of the world a camera sees
+            self._open_renderer()
         self._renderer.update_scene(self.data, camera=self.camera, scene_option=self._camera_view)
-        image = self._renderer.render()
+        image = self.lens.apply(self._renderer.render())
+        if self.realism["camera_exposure_s"] > 0.0:
+            image = self._motion_blur(image)
+        image = self.exposure.apply(image, self.time)
         std = self.cfg["camera"]["noise"] if noise_std is None else noise_std
         if std > 0.0:
             noisy = image + self.rng["camera"].normal(0.0, 255.0 * std, image.shape)
             image = np.clip(noisy, 0, 255).astype(np.uint8)
         return image
 
+    def _motion_blur(self, image):
+        from .camera_model import image_motion, motion_blur
+        velocity, omega = self.drone_velocity()
+        position, quat = self.drone_pose()
+        rotation = quat_to_matrix(quat)
+        below = self._surface_velocity_below(position)
+        optical_from_world = CAMERA_OPTICAL_IN_BODY @ rotation.T
+        distance = self.sonar_distance_true(position, rotation)
+        du, dv = image_motion(self.camera_intrinsics()[2], self.realism["camera_exposure_s"],
+                              optical_from_world @ (velocity - below), CAMERA_OPTICAL_IN_BODY @ omega, distance)
+        return motion_blur(image, du, dv)
+
+    def _surface_velocity_below(self, position):
+        """Velocity of the surface straight below the drone: the vehicle's if it is under it, else zero."""
+        x, y, yaw = self.vehicle_pose()
+        c, s = math.cos(yaw), math.sin(yaw)
+        dx, dy = position[0] - x, position[1] - y
+        px, py = c * dx + s * dy, -s * dx + c * dy
+        rect = self.vehicle_rectangle
+        if rect[0] <= px <= rect[1] and rect[2] <= py <= rect[3]:
+            vx, vy, _ = self.vehicle_velocity()
+            return np.array([vx, vy, 0.0])
+        return np.zeros(3)
+
+    def sonar_distance_true(self, position, rotation):
+        """Distance along the camera axis (body -z) to the first surface, without noise [m] (inf if none)."""
+        geom = np.zeros(1, dtype=np.int32)
+        distance = self._mj.mj_ray(self.model, self.data, position, -rotation[:, 2], None, 1, self.drone_body, geom)
+        return distance if distance >= 0 else math.inf
+
     def close(self):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+
+def _vehicle_top_rectangle(model, body):
+    """(x_min, x_max, y_min, y_max) [m] in the vehicle frame of the vehicle's box geoms seen from above (the
+    pad, the chassis): what the drone's optical flow sees of the vehicle."""
+    import mujoco
+    xs, ys = [], []
+    for geom in range(model.ngeom):
+        if model.geom_bodyid[geom] == body and model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_BOX:
+            (x, y, _), (hx, hy, _) = model.geom_pos[geom], model.geom_size[geom]
+            xs += [x - hx, x + hx]
+            ys += [y - hy, y + hy]
+    return (min(xs), max(xs), min(ys), max(ys)) if xs else (0.0, 0.0, 0.0, 0.0)
 
 
 def _as_slice(indices):
