@@ -76,6 +76,8 @@ std::string FilterParameters::validate() const
     { "observation_std_floor", observation_std_floor, false, "m" },
     { "observation_std_per_metre", observation_std_per_metre, true, "m/m" },
     { "gps_observation_covariance", gps_observation_covariance, false, "m^2" },
+    { "gps_offset_initial_std", gps_offset_initial_std, true, "m" },
+    { "gps_offset_drift", gps_offset_drift, true, "m/sqrt(s)" },
     { "gps_vision_timeout", gps_vision_timeout, true, "s" },
     { "initial_gps_height_std", initial_gps_height_std, false, "m" },
     { "max_coast_time", max_coast_time, false, "s" },
@@ -155,6 +157,9 @@ void PadMotionFilter::reset()
   last_vision_accepted_time_ = kNever;
   last_stamp_ = { kNever, kNever };
   consecutive_rejections_ = { 0, 0 };
+  gps_offset_.setZero();
+  gps_offset_variance_ = params_.gps_offset_initial_std * params_.gps_offset_initial_std;
+  gps_offset_time_ = kNever;
 }
 
 bool PadMotionFilter::isTracking(double now) const
@@ -184,7 +189,29 @@ MeasurementOutcome PadMotionFilter::addGps(double stamp, const Eigen::Vector2d& 
   std::optional<StartVelocity> start_velocity;
   if (velocity && velocity->allFinite() && isPositiveFinite(velocity_variance))
     start_velocity = StartVelocity{ *velocity, velocity_variance };
-  return addFix<2>(Source::kGps, stamp, position_xy, H, params_.gps_observation_covariance, start_velocity);
+  if (std::isfinite(stamp) && position_xy.allFinite())
+    learnGpsOffset(stamp, position_xy);
+  return addFix<2>(Source::kGps, stamp, position_xy - gps_offset_, H,
+                   params_.gps_observation_covariance + gps_offset_variance_, start_velocity);
+}
+
+void PadMotionFilter::learnGpsOffset(double stamp, const Eigen::Vector2d& position_xy)
+{
+  if (gps_offset_time_ > kNever && stamp > gps_offset_time_)
+    gps_offset_variance_ += params_.gps_offset_drift * params_.gps_offset_drift * (stamp - gps_offset_time_);
+  gps_offset_time_ = std::max(gps_offset_time_, stamp);
+  gps_offset_variance_ = std::min(gps_offset_variance_, params_.gps_offset_initial_std * params_.gps_offset_initial_std);
+  // Only against a track that vision holds now: the fix is then not needed for the track itself.
+  if (!initialised_ || !(stamp - last_vision_accepted_time_ < params_.gps_vision_timeout))
+    return;
+  const std::optional<PadState> track = stateAt(stamp);
+  if (!track)
+    return;
+  const Eigen::Vector2d observed = position_xy - track->position.head<2>();
+  const double noise = params_.gps_observation_covariance + 0.5 * track->position_covariance.topLeftCorner<2, 2>().trace();
+  const double gain = gps_offset_variance_ / (gps_offset_variance_ + noise);
+  gps_offset_ += gain * (observed - gps_offset_);
+  gps_offset_variance_ *= 1.0 - gain;
 }
 
 MeasurementOutcome PadMotionFilter::addHeading(double stamp, double heading, double variance)

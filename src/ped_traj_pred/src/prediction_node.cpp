@@ -50,6 +50,8 @@ FilterParameters loadFilterParameters(const ros::NodeHandle& nh)
   p.observation_std_floor = requireParam<double>(nh, "observation_std_floor");
   p.observation_std_per_metre = requireParam<double>(nh, "observation_std_per_metre");
   p.gps_observation_covariance = requireParam<double>(nh, "gps_observation_covariance");
+  p.gps_offset_initial_std = requireParam<double>(nh, "gps_offset_initial_std");
+  p.gps_offset_drift = requireParam<double>(nh, "gps_offset_drift");
   p.gps_vision_timeout = requireParam<double>(nh, "gps_vision_timeout");
   p.gps_pad_height = requireParam<double>(nh, "gps_pad_height");
   p.initial_gps_height_std = requireParam<double>(nh, "initial_gps_height_std");
@@ -96,10 +98,18 @@ geometry_msgs::Quaternion travelDirection(const Eigen::Vector3d& velocity)
     return yawQuaternion(0.0);
   return yawQuaternion(std::atan2(velocity.y(), velocity.x()));
 }
+
+double requirePositive(const ros::NodeHandle& nh, const std::string& name, const char* unit)
+{
+  const double value = requireParam<double>(nh, name);
+  if (!(std::isfinite(value) && value > 0.0))
+    throw ParameterError("invalid parameter: " + nh.resolveName(name) + " must be > 0 [" + unit + "]");
+  return value;
+}
 }  // namespace
 
 PredictionNode::PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
-  : filter_(loadFilterParameters(private_nh))
+  : filter_(loadFilterParameters(private_nh), requirePositive(private_nh, "fusion_horizon", "s"))
 {
   world_frame_ = withoutLeadingSlash(requireParam<std::string>(private_nh, "world_frame"));
   time_step_ = requireParam<double>(private_nh, "time_step");
@@ -184,44 +194,57 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
 {
   const geometry_msgs::Point& p = msg->pose.pose.position;
   const geometry_msgs::Quaternion& q = msg->pose.pose.orientation;
-  Eigen::Vector2d pad(p.x, p.y);
+  VehicleReport report;
+  report.pad_position << p.x, p.y;
   if (!gps_pad_offset_.isZero())
   {
     // The receiver sits at the vehicle origin; the pad centre is offset in the vehicle frame.
-    pad += Eigen::Rotation2Dd(yawOf(q)) * gps_pad_offset_;
+    report.pad_position += Eigen::Rotation2Dd(yawOf(q)) * gps_pad_offset_;
   }
-  if (!pad.allFinite())
+  if (!report.pad_position.allFinite())
   {
     ROS_WARN_THROTTLE(5.0, "Dropping a GPS fix with NaN or inf on %s", gps_sub_.getTopic().c_str());
     return;
   }
-  // The reported velocity (world frame) starts a track with a heading when vision is absent. The pad's
-  // offset from the receiver adds omega x offset, unknown here and at most a few cm/s.
-  std::optional<Eigen::Vector2d> velocity;
+  // The reported velocity (world frame) starts a track with a heading when vision is absent, and is the
+  // pad's speed. The pad's offset from the receiver adds omega x offset, unknown here and at most a few cm/s.
   const Eigen::Vector2d reported(msg->twist.twist.linear.x, msg->twist.twist.linear.y);
   const double velocity_variance = std::max(msg->twist.covariance[0], msg->twist.covariance[7]);
-  if (reported.allFinite() && velocity_variance > 0.0 && velocity_variance < kUnknownVariance)
-    velocity = reported;
-  const ros::Time stamp = stampOf(msg->header);
-  logOutcome(filter_.addGps(stamp.toSec(), pad, velocity, velocity_variance), gps_sub_.getTopic(), stamp);
-  // The same velocity is the pad's speed, seen before the vision fixes show a change of it.
-  if (velocity && filter_.addSpeed(stamp.toSec(), *velocity, velocity_variance) == MeasurementOutcome::kDroppedInvalid)
-    ROS_WARN_THROTTLE(5.0, "Dropping a velocity with NaN or inf on %s", gps_sub_.getTopic().c_str());
-  // The vehicle's heading, if reported (yaw variance), holds the track's heading through stops and reversals.
+  if (velocity_variance > 0.0 && velocity_variance < kUnknownVariance)
+  {
+    if (reported.allFinite())
+    {
+      report.velocity = reported;
+      report.velocity_variance = velocity_variance;
+    }
+    else
+      ROS_WARN_THROTTLE(5.0, "Dropping a velocity with NaN or inf on %s", gps_sub_.getTopic().c_str());
+  }
+  // The vehicle's heading and yaw rate, if reported (their variances given).
   const double yaw_variance = msg->pose.covariance[35];
   if (std::isfinite(yaw_variance) && yaw_variance > 0.0 && yaw_variance < kUnknownVariance)
   {
-    if (filter_.addHeading(stamp.toSec(), yawOf(q), yaw_variance) == MeasurementOutcome::kDroppedInvalid)
+    if (std::isfinite(yawOf(q)))
+    {
+      report.heading = yawOf(q);
+      report.heading_variance = yaw_variance;
+    }
+    else
       ROS_WARN_THROTTLE(5.0, "Dropping a heading with NaN or inf on %s", gps_sub_.getTopic().c_str());
   }
-  // ...and its yaw rate, if reported, the turn rate through the corners (vision alone follows them late).
   const double yaw_rate_variance = msg->twist.covariance[35];
   if (std::isfinite(yaw_rate_variance) && yaw_rate_variance > 0.0 && yaw_rate_variance < kUnknownVariance)
   {
-    if (filter_.addTurnRate(stamp.toSec(), msg->twist.twist.angular.z, yaw_rate_variance) ==
-        MeasurementOutcome::kDroppedInvalid)
+    if (std::isfinite(msg->twist.twist.angular.z))
+    {
+      report.yaw_rate = msg->twist.twist.angular.z;
+      report.yaw_rate_variance = yaw_rate_variance;
+    }
+    else
       ROS_WARN_THROTTLE(5.0, "Dropping a yaw rate with NaN or inf on %s", gps_sub_.getTopic().c_str());
   }
+  const ros::Time stamp = stampOf(msg->header);
+  logOutcome(filter_.addVehicleReport(stamp.toSec(), report), gps_sub_.getTopic(), stamp);
 }
 
 void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp)
@@ -239,8 +262,8 @@ void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& t
       ROS_INFO_THROTTLE(5.0, "Rejecting outliers on %s (outside the gate)", topic.c_str());
       break;
     case MeasurementOutcome::kDroppedStale:
-      ROS_WARN_THROTTLE(5.0, "Dropping fixes on %s not newer than the filter state (t = %.3f s)", topic.c_str(),
-                        stamp.toSec());
+      ROS_WARN_THROTTLE(5.0, "Dropping fixes on %s older than the fusion horizon (%.2f s) or than the last fix "
+                        "of their source (t = %.3f s)", topic.c_str(), filter_.horizon(), stamp.toSec());
       break;
     case MeasurementOutcome::kDroppedInvalid:
       ROS_WARN_THROTTLE(5.0, "Dropping a fix with a non-finite stamp on %s", topic.c_str());

@@ -38,8 +38,8 @@
 // fix of its source is dropped. A fix that no mode explains (squared Mahalanobis distance above
 // gate_threshold in every mode) is rejected; after max_consecutive_rejections in a row the track restarts
 // on the latest fix (the platform really moved, e.g. during a long blackout). GPS is fused only when
-// vision has been absent for gps_vision_timeout; a track that starts on a GPS fix starts from the
-// vehicle's reported velocity if given. The heading the vehicle reports with its GPS (addHeading) holds
+// vision has been absent for gps_vision_timeout, less the GPS offset learnt while vision was there; a
+// track that starts on a GPS fix starts from the vehicle's reported velocity if given. The heading the vehicle reports with its GPS (addHeading) holds
 // the track's heading where vision cannot tell it (at low speed, through reversals); its yaw rate
 // (addTurnRate) and velocity (addSpeed) give the turn rate and the speed. Without accepted
 // fixes the filter coasts for max_coast_time, then reports the track lost; the next fix starts a new track.
@@ -89,6 +89,12 @@ struct FilterParameters
   double observation_std_floor = 0.01;       ///< [m]
   double observation_std_per_metre = 0.0075; ///< [m/m]
   double gps_observation_covariance = 0.09;  ///< GPS position variance, per axis [m^2]
+  /// A receiver's error drifts slowly (metres, over a minute), and the vision fixes carry the drone's own
+  /// GPS error too: GPS and vision disagree by an offset that white noise does not describe. It is learnt
+  /// from the GPS fixes that arrive while vision is fresh (a random walk per axis, Kalman-estimated) and
+  /// taken off every fix the track uses.
+  double gps_offset_initial_std = 1.5;  ///< offset std before any vision, per axis [m]
+  double gps_offset_drift = 0.2;        ///< random-walk density of the offset [m/sqrt(s)]
   double gps_vision_timeout = 0.5;  ///< GPS is fused only when vision has been absent this long [s]
   double gps_pad_height = 0.497;    ///< pad height assumed when GPS starts a track [m]
   double initial_gps_height_std = 1.0;  ///< its standard deviation [m]
@@ -208,7 +214,10 @@ public:
   bool hasTrack() const { return initialised_; }
   /// Time of the filter state, i.e. of the last fused fix [s].
   double stateTime() const { return state_time_; }
-  /// Forget the track and the stamps seen (e.g. after the clock jumped back).
+  /// What is taken off each GPS fix (GPS minus vision track) [m], and its variance per axis [m^2].
+  const Eigen::Vector2d& gpsOffset() const { return gps_offset_; }
+  double gpsOffsetVariance() const { return gps_offset_variance_; }
+  /// Forget the track, the stamps seen and the GPS offset (e.g. after the clock jumped back).
   void reset();
 
   /// State predicted to `time` [s] without consuming a fix; nullopt without a track. Times before the
@@ -260,6 +269,9 @@ private:
   MeasurementOutcome addFix(Source source, double stamp, const Eigen::Matrix<double, M, 1>& z,
                             const Eigen::Matrix<double, M, Model::kSize>& H, double variance,
                             const std::optional<StartVelocity>& start_velocity = std::nullopt);
+  /// Propagates the GPS offset's variance to `stamp` and, while vision holds the track, updates the offset
+  /// with this fix's difference to the track at `stamp`.
+  void learnGpsOffset(double stamp, const Eigen::Vector2d& position_xy);
   /// Starts a track in the Cartesian form (heading unknown), then acquires the heading if `velocity`
   /// already tells it.
   void startTrack(Source source, double stamp, const Eigen::Vector3d& position, double position_variance,
@@ -307,6 +319,9 @@ private:
   Eigen::Vector2d mode_probabilities_;
   double state_time_ = 0.0;
   double last_accepted_time_ = 0.0;
+  Eigen::Vector2d gps_offset_ = Eigen::Vector2d::Zero();
+  double gps_offset_variance_ = 0.0;
+  double gps_offset_time_ = 0.0;  ///< time the offset's variance was last propagated to [s]
   double last_vision_accepted_time_ = 0.0;
   std::array<double, 2> last_stamp_{};
   std::array<int, 2> consecutive_rejections_{};

@@ -1,5 +1,6 @@
 // ROS wrapper of PadMotionFilter: detections in, predicted path and filtered odometry out.
 //
+// Every measurement is fused at its own stamp, however late it arrives (DelayedFusion, fusion_horizon).
 // Subscribes (relative names, from parameters):
 //   pose_topic  geometry_msgs/PointStamped  pad centre detections in world_frame
 //   relative_pose_topic  geometry_msgs/PointStamped  the same detections relative to the drone (optional;
@@ -12,7 +13,7 @@
 // Nothing is published while there is no track or it is lost; consumers detect that from the stamps.
 #pragma once
 
-#include "ped_traj_pred/pad_motion_filter.h"
+#include "ped_traj_pred/delayed_fusion.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <landing_msgs/lockstep_acker.h>
@@ -60,7 +61,7 @@ private:
   double pub_freq_;              // [Hz]
   Eigen::Vector2d gps_pad_offset_;  // pad centre in the vehicle frame relative to the GPS point [m]
 
-  PadMotionFilter filter_;
+  DelayedFusion filter_;  // frames and GPS reports arrive late: fused in the order they were taken
   ros::Subscriber detection_sub_, gps_sub_, relative_sub_;
   std::optional<std::pair<ros::Time, double>> last_range_;  // stamp and camera range of the latest relative fix
   ros::Publisher path_pub_, odom_pub_;
