@@ -5,7 +5,8 @@ A real AR.Drone flies its velocity and altitude loops on what it measures, not o
 - Horizontal velocity: the accelerometer (biased, noisy) integrated and pulled towards the optical flow of
   the bottom camera (``flow_gain`` per second). The flow measures the motion relative to what the camera
   sees: over the ground, the drone's velocity; over the moving vehicle, its velocity relative to the
-  vehicle (``surface_weight`` blends the two by how much of the view the vehicle covers).
+  vehicle (the simulator blends the two by how much of the view the vehicle covers,
+  landing_msgs.camera_footprint).
 - Height and climb rate: the accelerometer pulled towards the sonar height, i.e. the height above
   whatever surface is below (the drone follows the terrain, and rises when the vehicle passes under it).
   A sonar height far from the estimate is an outlier unless it persists ``surface_step_time``: then the
@@ -15,16 +16,7 @@ A real AR.Drone flies its velocity and altitude loops on what it measures, not o
 Velocities are in the world frame here; the firmware works in its heading frame, which it knows exactly
 relative to its own body, so this is the same estimate (its yaw drift does not enter).
 """
-import math
-
 import numpy as np
-
-
-def surface_weight(coverage, low, high):
-    """How much the flow follows the vehicle rather than the ground, from the fraction of the view the
-    vehicle covers: 0 below ``low``, 1 above ``high``, a smooth step between."""
-    x = min(1.0, max(0.0, (coverage - low) / (high - low)))
-    return x * x * (3.0 - 2.0 * x)
 
 
 class FirmwareEstimator:
@@ -78,32 +70,3 @@ class FirmwareEstimator:
         innovation = height - self.height
         self.height += min(1.0, self.p["height_gain"] * dt) * innovation
         self.climb += self.p["climb_gain"] * dt * innovation
-
-
-def footprint_coverage(camera_position, camera_rotation, focal, width, height, surface_z, vehicle_xy, vehicle_yaw,
-                       rectangle, samples=(8, 6)):
-    """Fraction of the camera's view that falls on the vehicle's top: rays through a grid of pixels meet the
-    plane ``surface_z`` [m]; the share inside ``rectangle`` (x_min, x_max, y_min, y_max in the vehicle frame
-    [m]). ``camera_rotation``: world <- optical frame (x right, y down, z forward)."""
-    us = (np.arange(samples[0]) + 0.5) * width / samples[0] - width / 2.0
-    vs = (np.arange(samples[1]) + 0.5) * height / samples[1] - height / 2.0
-    u, v = np.meshgrid(us, vs)
-    rays = np.stack([u.ravel() / focal, v.ravel() / focal, np.ones(u.size)])
-    world = camera_rotation @ rays
-    down = world[2]
-    drop = surface_z - camera_position[2]
-    valid = down < -1e-6
-    if drop >= 0.0 or not valid.any():
-        return 1.0 if drop >= 0.0 and _inside(camera_position[:2], vehicle_xy, vehicle_yaw, rectangle) else 0.0
-    scale = drop / np.where(valid, down, -1.0)
-    points = camera_position[:2, None] + world[:2] * scale
-    inside = _inside(points, vehicle_xy, vehicle_yaw, rectangle) & valid
-    return float(inside.mean())
-
-
-def _inside(points_xy, vehicle_xy, vehicle_yaw, rectangle):
-    c, s = math.cos(vehicle_yaw), math.sin(vehicle_yaw)
-    dx = np.asarray(points_xy[0]) - vehicle_xy[0]
-    dy = np.asarray(points_xy[1]) - vehicle_xy[1]
-    x, y = c * dx + s * dy, -s * dx + c * dy
-    return (x >= rectangle[0]) & (x <= rectangle[1]) & (y >= rectangle[2]) & (y <= rectangle[3])

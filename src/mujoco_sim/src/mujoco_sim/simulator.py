@@ -15,7 +15,9 @@ import numpy as np
 from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix, yaw_of
 from .config import ConfigError
 from .environment import Battery, Wind, aerodynamic_force
-from .firmware import FirmwareEstimator, footprint_coverage, surface_weight
+from landing_msgs import camera_footprint
+
+from .firmware import FirmwareEstimator
 from .realism import DelayLine, Dropouts, GaussMarkov, RandomWalk
 
 LOG = logging.getLogger("mujoco_sim.simulator")
@@ -387,15 +389,20 @@ class Simulator:
         return measured * self.flow_scale + self._noise("flow", std, 2)
 
     def _surface_weight(self, rotation):
+        """How much the optical flow follows the vehicle: by the share of the camera's view its top covers."""
         camera_position, _ = self.camera_pose_in_body()
         position, _ = self.drone_pose()
         width, height, fx, _, _, _ = self.camera_intrinsics()
+        rays = camera_footprint.corner_rays(math.degrees(2.0 * math.atan(width / 2.0 / fx)), width / height)
+        corners = camera_footprint.footprint(position + rotation @ camera_position, rotation @ CAMERA_OPTICAL_IN_BODY,
+                                             rays, float(self.data.site_xpos[self.pad_site][2]))
         x, y, yaw = self.vehicle_pose()
-        coverage = footprint_coverage(position + rotation @ camera_position, rotation @ CAMERA_OPTICAL_IN_BODY.T,
-                                      fx, width, height, float(self.data.site_xpos[self.pad_site][2]), (x, y), yaw,
-                                      self.vehicle_rectangle)
+        if corners is None:  # at or below the vehicle's top: on it, or beside it
+            share = float(self._over_vehicle(position))
+        else:
+            share = camera_footprint.coverage(corners, (x, y), yaw, self.vehicle_rectangle)
         f = self.cfg["firmware"]
-        return surface_weight(coverage, f["coverage_low"], f["coverage_high"])
+        return camera_footprint.surface_weight(share, f["coverage_low"], f["coverage_high"])
 
     def _step_biases(self, now):
         dt = now - self.biases_time
@@ -698,14 +705,18 @@ class Simulator:
                               optical_from_world @ (velocity - below), CAMERA_OPTICAL_IN_BODY @ omega, distance)
         return motion_blur(image, du, dv)
 
-    def _surface_velocity_below(self, position):
-        """Velocity of the surface straight below the drone: the vehicle's if it is under it, else zero."""
+    def _over_vehicle(self, position):
+        """Whether the point (x, y) of ``position`` lies above the vehicle's top rectangle."""
         x, y, yaw = self.vehicle_pose()
         c, s = math.cos(yaw), math.sin(yaw)
         dx, dy = position[0] - x, position[1] - y
         px, py = c * dx + s * dy, -s * dx + c * dy
         rect = self.vehicle_rectangle
-        if rect[0] <= px <= rect[1] and rect[2] <= py <= rect[3]:
+        return rect[0] <= px <= rect[1] and rect[2] <= py <= rect[3]
+
+    def _surface_velocity_below(self, position):
+        """Velocity of the surface straight below the drone: the vehicle's if it is under it, else zero."""
+        if self._over_vehicle(position):
             vx, vy, _ = self.vehicle_velocity()
             return np.array([vx, vy, 0.0])
         return np.zeros(3)

@@ -19,14 +19,25 @@ Ground truth never enters here (docs/conventions.md). The sensors and what each 
   tracker uses it directly as height above the pad).
 
 Each sensor call carries its own time stamp; the filter predicts to that time with the last flow
-velocity (zero-order hold) before using it, so message rates and arrival order may vary.
+velocity (zero-order hold) before using it, so message rates and arrival order may vary. A GPS fix
+arrives 0.2-0.4 s after it was taken (receiver and link): it is compared with the estimate of that
+instant (a short history), and the difference corrects the present state.
+
+Over the moving vehicle the flow measures the drone's motion relative to the vehicle (the firmware's
+optical flow follows what the camera sees, flow_surface.py): the part of the pad's velocity it takes
+off is added back, from the pad's predicted state (kalman_platform_odom).
 """
+import bisect
+import collections
 import dataclasses
 import math
 
 import numpy as np
 
 from .params import EstimatorParams
+
+HISTORY_SPAN = 1.5  # seconds of past estimates kept for late GPS fixes [s]
+PAD_MAX_AGE = 1.0   # a pad state older than this is not used to correct the flow [s]
 
 
 def yaw_from_quaternion(w, x, y, z):
@@ -172,9 +183,12 @@ class Estimate:
 class DroneEstimator:
     """Fuses the drone's sensors into an ``Estimate``; see the module docstring."""
 
-    def __init__(self, params: EstimatorParams = EstimatorParams(), log=None):
+    def __init__(self, params: EstimatorParams = EstimatorParams(), log=None, surface=None):
         self.p = params
         self.log = log or (lambda message: None)
+        self.surface = surface           # FlowSurface, or None: the flow is over the ground
+        self.pad_state = None            # (time, position, velocity) of the pad, world frame
+        self.history = collections.deque()  # (time, position, velocity) after each prediction
         self.horizontal = HorizontalFilter(params.position_process_noise, params.flow_bias_process_noise,
                                            params.flow_velocity_std, params.initial_flow_bias_std)
         self.vertical = AxisFilter(params.altitude_process_noise, params.flow_velocity_std)
@@ -190,7 +204,7 @@ class DroneEstimator:
         # Part of the latest corrections not yet passed on to the published position (see estimate()).
         self.pending_correction = np.zeros(3)
         self.counters = {"gps_used": 0, "gps_rejected": 0, "gps_reanchored": 0, "sonar_used": 0,
-                         "altimeter_rejected": 0}
+                         "altimeter_rejected": 0, "flow_over_vehicle": 0}
 
     # ----- state ---------------------------------------------------------------------------------
     @property
@@ -227,6 +241,27 @@ class DroneEstimator:
         self.pending_correction *= math.exp(-dt / self.p.correction_smoothing_time) \
             if self.p.correction_smoothing_time > 0.0 else 0.0
         self.time = t
+        if self.ready:
+            self.history.append((t, self._position_now(), self._velocity(t)))
+            while self.history and self.history[0][0] < t - HISTORY_SPAN:
+                self.history.popleft()
+
+    def _position_now(self):
+        return np.array([self.horizontal.x[0], self.horizontal.x[1], self.vertical.p])
+
+    def _past(self, t):
+        """(position, velocity) of the filter at an earlier time ``t``, interpolated in the history; the
+        present ones when ``t`` is not in the past or the history does not reach back (then a fix is used as
+        if taken now)."""
+        if self.time is None or t >= self.time or not self.history or t < self.history[0][0]:
+            return self._position_now(), self._velocity(self.time)
+        times = [h[0] for h in self.history]
+        i = bisect.bisect_left(times, t)
+        if i == 0:
+            return self.history[0][1], self.history[0][2]
+        (t0, p0, v0), (t1, p1, v1) = self.history[i - 1], self.history[i]
+        f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
+        return p0 + f * (p1 - p0), v0 + f * (v1 - v0)
 
     def estimate(self, t=None):
         """The estimate moved to ``t`` (default: the latest measurement time) with the current velocity,
@@ -261,17 +296,45 @@ class DroneEstimator:
         return True
 
     def flow(self, t, vx_heading, vy_heading, vz):
-        """Navdata optical-flow velocity: forward/left in the heading frame, vertical [m/s]."""
+        """Navdata optical-flow velocity: forward/left in the heading frame, vertical [m/s]. Over the
+        vehicle, the part of the pad's velocity the flow took off is added back (flow_surface.py)."""
         self._advance(t)
+        seen = self._seen_pad_velocity(t)
+        if seen is not None:
+            c, s = math.cos(self.yaw), math.sin(self.yaw)
+            vx_heading += c * seen[0] + s * seen[1]
+            vy_heading += -s * seen[0] + c * seen[1]
         self.flow_heading = (vx_heading, vy_heading, vz)
         self.flow_time = t
         return True
 
+    def pad(self, t, position, velocity):
+        """The pad's predicted state at ``t``: world position [m] and velocity [m/s]."""
+        self.pad_state = (t, np.asarray(position, dtype=float), np.asarray(velocity, dtype=float))
+
+    def _seen_pad_velocity(self, t):
+        if self.surface is None or not self.surface.enabled or self.pad_state is None or not self.ready:
+            return None
+        pad_t, pad_position, pad_velocity = self.pad_state
+        if abs(t - pad_t) > PAD_MAX_AGE:
+            return None
+        seen = self.surface.seen_pad_velocity(self.estimate(t).position, self.orientation,
+                                              pad_position + pad_velocity * (t - pad_t), pad_velocity)
+        if seen.any():
+            self.counters["flow_over_vehicle"] += 1
+        return seen
+
     def gps(self, t, position, velocity=None):
-        """GPS fix: world position [m] and optionally world velocity [m/s]; returns whether it was used."""
+        """GPS fix taken at ``t``: world position [m] and optionally world velocity [m/s]; returns whether it
+        was used. A fix older than the filter is compared with the estimate of its instant: what differs
+        corrects the present state (position and velocity moved on by the filter's own motion since)."""
         self._advance(t)
+        then_position, then_velocity = self._past(t)
+        now_position, now_velocity = self._position_now(), self._velocity(self.time)
+        position = np.asarray(position, dtype=float) + (now_position - then_position)[:len(position)]
         if velocity is not None:
-            self.gps_velocity, self.gps_velocity_time = tuple(velocity), t
+            velocity = np.asarray(velocity, dtype=float) + (now_velocity - then_velocity)[:len(velocity)]
+            self.gps_velocity, self.gps_velocity_time = tuple(velocity), max(t, self.time)
         variance = self.p.gps_position_std ** 2
         if not self.horizontal.initialised:
             self.horizontal.reset(position, variance)

@@ -23,6 +23,8 @@ use platform_tracking/command "land" for the gated landing on the pad.
 
 Inputs with a non-finite value are dropped with a throttled warning naming the topic.
 """
+import collections
+import dataclasses
 import math
 import sys
 import threading
@@ -37,9 +39,10 @@ from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, String
 
-from .controller import DroneState, PadPrediction
+from .controller import DroneState, PadPrediction, TrackingController
 from .estimator import DroneEstimator, yaw_from_quaternion
-from .params import EstimatorParams, ParamError, TrackingParams, from_mapping
+from .flow_surface import FlowSurface
+from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
 from .state_machine import Inputs, State, TrackingStateMachine
 
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
@@ -56,11 +59,15 @@ def warn_dropped(topic, why):
     rospy.logwarn_throttle(WARN_PERIOD, "dropped a message on %s: %s" % (rospy.resolve_name(topic), why))
 
 
-def load_params(cls, check=None):
-    """The node's private parameters as ``cls``; a missing or bad one is fatal and named."""
-    source = "%s private parameters" % rospy.get_name()
+def load_params(cls, check=None, namespace="~", exclude=("flow_surface",)):
+    """The node's private parameters (or those of a sub-namespace) as ``cls``; a missing or bad one is fatal
+    and named. Sub-namespaces in ``exclude`` are another class's."""
+    source = "%s parameters" % rospy.resolve_name(namespace)
     try:
-        params = from_mapping(cls, rospy.get_param("~", {}), source)
+        mapping = rospy.get_param(namespace, {})
+        if isinstance(mapping, dict):
+            mapping = {k: v for k, v in mapping.items() if k not in exclude}
+        params = from_mapping(cls, mapping, source)
         return params.check(source) if check else params
     except ParamError as err:
         rospy.logfatal("%s cannot start: %s (see platform_tracking/config/)", rospy.get_name(), err)
@@ -79,9 +86,15 @@ def wait_for_clock():
 
 
 # ------------------------------------------------------------------------------------------------
+def load_flow_surface():
+    """The drone's flow model over the vehicle, from ~flow_surface (config/flow_surface_<vehicle>.yaml)."""
+    return FlowSurface(load_params(FlowSurfaceParams, check=True, namespace="~flow_surface", exclude=()))
+
+
 class EstimatorNode:
     def __init__(self):
         self.params = load_params(EstimatorParams)
+        self.surface = load_flow_surface()
         self.lock = threading.Lock()
         self.estimator = self._new_estimator()
         self.publisher = rospy.Publisher("ardrone/odom_estimate", Odometry, queue_size=10)
@@ -92,9 +105,19 @@ class EstimatorNode:
         rospy.Subscriber("ardrone/gps/odom", Odometry, self.on_gps, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/altimeter", Altimeter, self.on_altimeter, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
+        if self.surface.enabled:
+            rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad, queue_size=5, tcp_nodelay=True)
 
     def _new_estimator(self):
-        return DroneEstimator(self.params, log=lambda line: rospy.loginfo("drone_estimator: %s", line))
+        return DroneEstimator(self.params, log=lambda line: rospy.loginfo("drone_estimator: %s", line),
+                              surface=self.surface)
+
+    def on_pad(self, msg):
+        p, v = msg.pose.pose.position, msg.twist.twist.linear
+        if not finite(p.x, p.y, p.z, v.x, v.y, v.z):
+            return warn_dropped("kalman_platform_odom", "non-finite value")
+        with self.lock:
+            self.estimator.pad(stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z))
 
     def _at(self, t):
         """Called with the lock held before using a measurement stamped ``t``: restarts the filter
@@ -204,17 +227,19 @@ def build_prediction(path, odom):
 class TrackingNode:
     def __init__(self):
         self.params = load_params(TrackingParams, check=True)
+        self.surface = load_flow_surface()
         self.lock = threading.Lock()
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
-        self.estimate = None          # (stamp, DroneState without sonar)
-        self.sonar = None             # latest valid sonar range or None
+        self.estimate = None          # (stamp, DroneState without sonar, orientation w, x, y, z)
+        self.sonar = None             # median of the last three sonar ranges (a spurious echo is one of them), or None
+        self.sonar_ranges = collections.deque(maxlen=3)
         self.navdata_state = None
         self.path = None              # (times, positions) of the latest kalman_prediction_path
         self.pad_odom = None          # (stamp, position, velocity) of the latest kalman_platform_odom
         self.prediction = None        # PadPrediction built from the two, cached until one changes
         self.requests = set()
         self.landing_allowed = True
-        self.seen_at = None           # stamp of the image of the latest pad detection
+        self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -245,7 +270,7 @@ class TrackingNode:
             return warn_dropped("ardrone/odom_estimate", "frame '%s', expected 'world'" % msg.header.frame_id)
         state = DroneState(np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]), yaw_from_quaternion(q.w, q.x, q.y, q.z))
         with self.lock:
-            self.estimate = (stamp_of(msg), state)
+            self.estimate = (stamp_of(msg), state, (q.w, q.x, q.y, q.z))
 
     def on_path(self, msg):
         if msg.header.frame_id not in WORLD_FRAMES:
@@ -284,11 +309,15 @@ class TrackingNode:
             return warn_dropped("ardrone/sonar_height", "range is NaN")
         valid = math.isfinite(msg.range) and msg.range < msg.max_range if msg.max_range > 0 else math.isfinite(msg.range)
         with self.lock:
-            self.sonar = float(msg.range) if valid else None
+            self.sonar_ranges.append(float(msg.range) if valid else math.inf)
+            median = sorted(self.sonar_ranges)[len(self.sonar_ranges) // 2]
+            self.sonar = median if math.isfinite(median) else None
 
     def on_detection(self, msg):
+        # When it arrived, not when its image was taken: frames come 0.1-0.2 s late on a real link, and
+        # "seen" means the camera is still finding the pad (the prediction makes up for the delay).
         with self.lock:
-            self.seen_at = stamp_of(msg)
+            self.seen_at = rospy.get_time()
 
     def on_landing_allowed(self, msg):
         with self.lock:
@@ -322,9 +351,9 @@ class TrackingNode:
         now = rospy.Time.now()
         t = now.to_sec()
         with self.lock:
-            drone = None
+            drone, orientation = None, None
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
-                state = self.estimate[1]
+                state, orientation = self.estimate[1], self.estimate[2]
                 drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
@@ -338,9 +367,10 @@ class TrackingNode:
         if out.send_land:
             self.pub_land.publish(Empty())
         if out.command is not None:
+            command = self._firmware_command(out.command, t, drone, orientation, inputs.pad)
             twist = Twist()
-            twist.linear.x, twist.linear.y, twist.linear.z = out.command.vx, out.command.vy, out.command.vz
-            twist.angular.z = out.command.yaw_rate
+            twist.linear.x, twist.linear.y, twist.linear.z = command.vx, command.vy, command.vz
+            twist.angular.z = command.yaw_rate
             self.pub_cmd.publish(twist)
         if out.state != before:
             self.pub_state.publish(String(data=out.state.value))
@@ -350,6 +380,17 @@ class TrackingNode:
             target.point.x, target.point.y, target.point.z = (float(v) for v in out.target)
             self.pub_target.publish(target)
         self.lockstep.ack(now)
+
+    def _firmware_command(self, command, t, drone, orientation, pad):
+        """The drone flies its command relative to what its flow sees: over the vehicle, take off the part of
+        the pad's velocity the flow does not see (flow_surface.py)."""
+        if not self.surface.enabled or drone is None or pad is None or self.machine.state == State.LANDED:
+            return command
+        seen = self.surface.seen_pad_velocity(drone.position, orientation, pad.position_at(t), pad.velocity)
+        if not seen.any():
+            return command
+        forward, left = TrackingController.to_heading_frame(seen, drone.yaw)
+        return dataclasses.replace(command, vx=command.vx - forward, vy=command.vy - left)
 
     def spin(self):
         wait_for_clock()

@@ -86,6 +86,28 @@ class EstimatorParams:
 
 
 @dataclasses.dataclass(frozen=True)
+class FlowSurfaceParams:
+    """See config/flow_surface_summit_xl.yaml for the meaning of each key."""
+    enabled: bool = spec(True)
+    camera_hfov_deg: float = spec(64.0, 1.0, 179.0, "deg")
+    image_aspect: float = spec(4.0 / 3.0, 0.1, 10.0, "-")
+    camera_below_base_link: float = spec(0.035, 0.0, 1.0, "m")
+    coverage_low: float = spec(0.25, 0.0, 1.0, "-")
+    coverage_high: float = spec(0.65, 0.0, 1.0, "-")
+    top_x_min: float = spec(-0.5, -50.0, 50.0, "m")
+    top_x_max: float = spec(0.5, -50.0, 50.0, "m")
+    top_y_min: float = spec(-0.5, -50.0, 50.0, "m")
+    top_y_max: float = spec(0.5, -50.0, 50.0, "m")
+
+    def check(self, source="flow surface parameters"):
+        if not (self.coverage_low < self.coverage_high and self.top_x_min < self.top_x_max and
+                self.top_y_min < self.top_y_max):
+            raise ParamError("%s: expected coverage_low < coverage_high, top_x_min < top_x_max and top_y_min < "
+                             "top_y_max" % source)
+        return self
+
+
+@dataclasses.dataclass(frozen=True)
 class TrackingParams:
     """See config/tracking.yaml for the meaning of each key."""
     rate_hz: float = spec(30.0, 1.0, 500.0, "Hz")

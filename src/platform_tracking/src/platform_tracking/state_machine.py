@@ -79,7 +79,7 @@ class Inputs:
     land: bool = False
     force_land: bool = False
     landing_allowed: bool = True
-    vision_age: Optional[float] = None      # time since the image of the latest pad detection [s]; None: never
+    vision_age: Optional[float] = None      # time since the latest pad detection arrived [s]; None: never
 
 
 @dataclasses.dataclass

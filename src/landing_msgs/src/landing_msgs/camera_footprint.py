@@ -1,0 +1,86 @@
+"""How much of a downward camera's view a rectangle on a horizontal plane covers, ROS-free and numpy-free.
+
+The drone's optical flow measures its motion relative to what its bottom camera sees: over the ground,
+its velocity; over the moving vehicle, its velocity relative to the vehicle; in between, a blend by how
+much of the view the vehicle covers. The simulator's firmware (mujoco_sim) uses this to make the flow,
+the landing stack (platform_tracking) to undo it, each from its own inputs (truth there, estimates here).
+
+The footprint is the quadrilateral where the rays through the image corners meet the plane; the coverage
+is its area inside the rectangle (Sutherland-Hodgman clipping) over its whole area.
+"""
+import math
+
+
+def corner_rays(hfov_deg, aspect):
+    """Directions of the image corners in the camera's optical frame (x right, y down, z forward), in order
+    around the image, for a horizontal field of view ``hfov_deg`` [deg] and width / height ``aspect``."""
+    tx = math.tan(math.radians(hfov_deg) / 2.0)
+    ty = tx / aspect
+    return ((-tx, -ty, 1.0), (tx, -ty, 1.0), (tx, ty, 1.0), (-tx, ty, 1.0))
+
+
+def footprint(camera_position, world_from_optical, rays, plane_z):
+    """Corners (x, y) where ``rays`` (optical frame) from the camera at ``camera_position`` (world [m]),
+    turned by the 3x3 rotation ``world_from_optical`` (rows), meet the plane z = ``plane_z``; None if the
+    camera is not above the plane or a ray does not point down to it."""
+    drop = plane_z - camera_position[2]
+    if drop >= 0.0:
+        return None
+    corners = []
+    for ray in rays:
+        wx, wy, wz = (sum(row[i] * ray[i] for i in range(3)) for row in world_from_optical)
+        if wz >= -1e-6:
+            return None
+        scale = drop / wz
+        corners.append((camera_position[0] + wx * scale, camera_position[1] + wy * scale))
+    return corners
+
+
+def coverage(corners, centre_xy, yaw, rectangle):
+    """Share of the polygon ``corners`` (world x, y, convex) inside ``rectangle`` (x_min, x_max, y_min,
+    y_max) of a frame at ``centre_xy`` turned by ``yaw`` [rad]."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = [(c * (x - centre_xy[0]) + s * (y - centre_xy[1]), -s * (x - centre_xy[0]) + c * (y - centre_xy[1]))
+             for x, y in corners]
+    whole = _area(local)
+    if whole <= 1e-12:
+        return 0.0
+    x_min, x_max, y_min, y_max = rectangle
+    inside = local
+    for axis, bound, keep_below in ((0, x_min, False), (0, x_max, True), (1, y_min, False), (1, y_max, True)):
+        inside = _clip(inside, axis, bound, keep_below)
+        if not inside:
+            return 0.0
+    return min(1.0, _area(inside) / whole)
+
+
+def _clip(polygon, axis, bound, keep_below):
+    """The part of ``polygon`` on one side of the line ``p[axis] = bound``."""
+    def keep(p):
+        return p[axis] <= bound if keep_below else p[axis] >= bound
+    out = []
+    for i, current in enumerate(polygon):
+        previous = polygon[i - 1]
+        if keep(current):
+            if not keep(previous):
+                out.append(_crossing(previous, current, axis, bound))
+            out.append(current)
+        elif keep(previous):
+            out.append(_crossing(previous, current, axis, bound))
+    return out
+
+
+def _crossing(a, b, axis, bound):
+    f = (bound - a[axis]) / (b[axis] - a[axis])
+    return (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]))
+
+
+def _area(polygon):
+    return 0.5 * abs(sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(polygon, polygon[1:] + polygon[:1])))
+
+
+def surface_weight(share, low, high):
+    """How much the flow follows the vehicle rather than the ground, from the share of the view the
+    vehicle covers: 0 below ``low``, 1 above ``high``, a smooth step between."""
+    x = min(1.0, max(0.0, (share - low) / (high - low)))
+    return x * x * (3.0 - 2.0 * x)

@@ -1,0 +1,68 @@
+"""What the drone's own velocity (navdata vx, vy) means over the moving vehicle, ROS-free.
+
+The AR.Drone's firmware estimates its velocity with the optical flow of its bottom camera, and flies
+its velocity loop on that estimate. The flow measures motion relative to what the camera sees: over
+the ground the drone's velocity, over the vehicle its velocity relative to the vehicle, and in between
+a blend by how much of the view the vehicle's top covers (weight 0..1, landing_msgs.camera_footprint).
+So, with ``w`` that weight and ``v_pad`` the vehicle's velocity:
+
+    navdata velocity = v_drone - w v_pad          (the estimator adds w v_pad back)
+    the drone flies at = command + w v_pad         (the tracker takes w v_pad off its command)
+
+The weight comes from the drone's estimated pose, the predicted pad and the vehicle's top (a rectangle
+around the pad, config/flow_surface_<vehicle>.yaml): the stack knows its drone's firmware as a
+calibration would tell it, not from the simulator.
+"""
+import math
+
+import numpy as np
+from landing_msgs import camera_footprint
+
+from .params import FlowSurfaceParams
+
+# Optical frame (x right, y down, z forward) of the bottom camera in the body frame (docs/conventions.md).
+CAMERA_OPTICAL_IN_BODY = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+MIN_HEADING_SPEED = 0.3  # below this the pad's direction of travel is not its heading [m/s]
+
+
+def rotation_of(w, x, y, z):
+    """World <- body rotation matrix of a unit quaternion."""
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+class FlowSurface:
+    def __init__(self, params: FlowSurfaceParams):
+        self.p = params
+        self.rays = camera_footprint.corner_rays(params.camera_hfov_deg, params.image_aspect)
+        self.rectangle = (params.top_x_min, params.top_x_max, params.top_y_min, params.top_y_max)
+        self.pad_yaw = 0.0  # the vehicle's heading, kept while it stands still
+
+    @property
+    def enabled(self):
+        return self.p.enabled
+
+    def weight(self, drone_position, orientation_wxyz, pad_position, pad_velocity):
+        """How much the flow follows the vehicle (0: the ground, 1: the vehicle)."""
+        if not self.p.enabled:
+            return 0.0
+        if math.hypot(pad_velocity[0], pad_velocity[1]) > MIN_HEADING_SPEED:
+            self.pad_yaw = math.atan2(pad_velocity[1], pad_velocity[0])
+        rotation = rotation_of(*orientation_wxyz)
+        camera = np.asarray(drone_position, dtype=float) - self.p.camera_below_base_link * rotation[:, 2]
+        corners = camera_footprint.footprint(camera, rotation @ CAMERA_OPTICAL_IN_BODY, self.rays, pad_position[2])
+        if corners is None:  # at the pad's height or below: resting on it (or beside the vehicle)
+            c, s = math.cos(self.pad_yaw), math.sin(self.pad_yaw)
+            dx, dy = drone_position[0] - pad_position[0], drone_position[1] - pad_position[1]
+            x, y = c * dx + s * dy, -s * dx + c * dy
+            r = self.rectangle
+            share = 1.0 if r[0] <= x <= r[1] and r[2] <= y <= r[3] else 0.0
+        else:
+            share = camera_footprint.coverage(corners, pad_position[:2], self.pad_yaw, self.rectangle)
+        return camera_footprint.surface_weight(share, self.p.coverage_low, self.p.coverage_high)
+
+    def seen_pad_velocity(self, drone_position, orientation_wxyz, pad_position, pad_velocity):
+        """The part of the pad's velocity (world x, y) the flow takes off the drone's: w v_pad."""
+        w = self.weight(drone_position, orientation_wxyz, pad_position, pad_velocity)
+        return w * np.asarray(pad_velocity[:2], dtype=float)
