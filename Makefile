@@ -37,11 +37,15 @@ $(STAMPS)/venv: requirements.txt $(STAMPS)/apt
 	@echo "== Python venv (system site-packages for ROS) with pinned packages"
 	/usr/bin/python3 -m venv --system-site-packages $(VENV)
 	$(VENV)/bin/pip install -q --disable-pip-version-check -r requirements.txt
-	@# so `.venv/bin/python -m interface.analyze BAG` works in a shell where nothing is sourced
-	echo "$(WS)/src/interface/src" > "$$($(VENV)/bin/python -c 'import site; print(site.getsitepackages()[0])')/landing_interface.pth"
 	@touch $@
 
-deps: $(STAMPS)/venv
+# So that `.venv/bin/python -m landing_eval.analyze BAG --out DIR` works in a shell where nothing is sourced.
+$(STAMPS)/pth: Makefile $(STAMPS)/venv
+	site="$$($(VENV)/bin/python -c 'import site; print(site.getsitepackages()[0])')"; \
+	rm -f "$$site/landing_interface.pth"; echo "$(WS)/src/landing_eval/src" > "$$site/landing_eval.pth"
+	@touch $@
+
+deps: $(STAMPS)/venv $(STAMPS)/pth
 
 build: deps
 	@echo "== catkin_make"
@@ -57,13 +61,13 @@ test: build
 DEMO_SCENARIO ?= scenarios/summit_circle_1ms.yaml
 demo: build
 	@echo "== demo: one headless landing on the moving Summit XL ($(DEMO_SCENARIO))"
-	source env.sh && rosrun interface run_scenario $(DEMO_SCENARIO) --out results/demo
-	source env.sh && rosrun interface analyze results/demo/flight.bag --out results/demo/report
+	source env.sh && rosrun landing_eval run_scenario $(DEMO_SCENARIO) --out results/demo
+	source env.sh && rosrun landing_eval analyze results/demo/flight.bag --out results/demo/report
 	@echo "== report: results/demo/report/report.md (plots beside it), bag: results/demo/flight.bag"
 
 bench: build
-	source env.sh && rosrun mujoco_sim bench_sim
-	source env.sh && rosrun interface benchmark scenarios --out results/bench --jobs 2 --readme README.md || true
+	source env.sh && rosrun landing_eval bench_sim
+	source env.sh && rosrun landing_eval benchmark scenarios --out results/bench --jobs 2 --readme README.md || true
 	@echo "== results table written to README.md (Results section) and results/bench/summary.md"
 
 clean:

@@ -34,7 +34,7 @@ def pytest_collection_modifyitems(config, items):
 def ros_master():
     """A bare ROS master on a free port: (rosgraph.Master proxy, environment for nodes that use it)."""
     rosgraph = pytest.importorskip("rosgraph")
-    from mujoco_sim.isolated_ros import free_port
+    from landing_eval.isolated_ros import free_port
     port = free_port()
     uri = "http://127.0.0.1:%d" % port
     env = dict(os.environ, ROS_MASTER_URI=uri, ROS_HOSTNAME="127.0.0.1")

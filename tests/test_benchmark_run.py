@@ -1,4 +1,4 @@
-"""One short benchmark run, for real: `rosrun interface benchmark` on a small directory with a thesis
+"""One short benchmark run, for real: `rosrun landing_eval benchmark` on a small directory with a thesis
 scenario (battery 10 % in flight: emergency landing with coordinates) and a file with a typo. Each
 scenario gets its own master and simulator; the bad file must come out as an error row, never a success."""
 import csv
@@ -23,7 +23,7 @@ def test_short_benchmark_run_scores_the_good_scenario_and_marks_the_bad_one(tmp_
     (suite / "typo.yaml").write_text("name: typo\nplatfrom: {vehicle: summit_xl}\n")
 
     out = tmp_path / "out"
-    run = subprocess.run(["rosrun", "interface", "benchmark", str(suite), "--out", str(out), "--jobs", "2"],
+    run = subprocess.run(["rosrun", "landing_eval", "benchmark", str(suite), "--out", str(out), "--jobs", "2"],
                          capture_output=True, text=True, timeout=WALL_TIMEOUT_S, stdin=subprocess.DEVNULL)
     assert run.returncode == 1, "one scenario is bad, so the benchmark must fail:\n" + run.stdout + run.stderr
 

@@ -4,8 +4,8 @@ import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "src", "interface", "src"))
-from interface import benchmark, scenario  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "src", "landing_eval", "src"))
+from landing_eval import benchmark, scenario  # noqa: E402
 
 SUITE = os.path.join(ROOT, "scenarios")
 

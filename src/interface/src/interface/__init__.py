@@ -1,1 +1,1 @@
-"""Supervisor, operator console, launch files, scenario runner, benchmark and flight analysis."""
+"""Supervisor, emergency module, cmd_vel mux, operator console and the launch files of the landing system."""

@@ -78,7 +78,7 @@ def run_one(path, out_root, wall_timeout):
                speed_mps=s["platform"]["speed_mps"], wind_speed=s["conditions"]["wind_speed"],
                expected=json.dumps(s["expect"].get("outcome", "landed_on_pad")))
     out_dir = os.path.join(out_root, s["name"])
-    command = [sys.executable, "-m", "interface.runner_cli", path, "--out", out_dir]
+    command = [sys.executable, "-m", "landing_eval.runner_cli", path, "--out", out_dir]
     if wall_timeout:
         command += ["--wall-timeout", str(wall_timeout)]
     with open(os.path.join(out_root, s["name"] + ".log"), "w") as log:

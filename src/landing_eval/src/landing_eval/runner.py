@@ -11,7 +11,7 @@ import sys
 import threading
 import time
 
-from mujoco_sim.isolated_ros import IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
+from .isolated_ros import IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
 
 from . import scenario as scenario_mod
 from . import scoring

@@ -1,4 +1,4 @@
-"""interface.analyze end to end: bags written here with the rosbags writer (known answers), a damaged and a
+"""landing_eval.analyze end to end: bags written here with the rosbags writer (known answers), a damaged and a
 truncated copy, bad input, and the command run in a clean environment (no ROS sourced, no master)."""
 import glob
 import json
@@ -21,8 +21,8 @@ pytest.importorskip("rosbags")
 from rosbags.rosbag1 import Writer  # noqa: E402
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
 
-from interface import analyze  # noqa: E402
-from interface.analysis_bag import BagError, read_bag  # noqa: E402
+from landing_eval import analyze  # noqa: E402
+from landing_eval.analysis_bag import BagError, read_bag  # noqa: E402
 
 SUBPROCESS_TIMEOUT = 300  # generous: the machine may be loaded
 
@@ -314,13 +314,13 @@ def run_cli(args, cwd=None, env=None):
 
 def test_python_dash_m_works_in_a_clean_environment_without_ros(flight, tmp_path):
     out = str(tmp_path / "out")
-    result = subprocess.run([sys.executable, "-m", "interface.analyze", flight, "--out", out], cwd=SRC,
+    result = subprocess.run([sys.executable, "-m", "landing_eval.analyze", flight, "--out", out], cwd=SRC,
                             env=clean_env(tmp_path), capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
     assert result.returncode == 0, result.stderr
     assert "landed_on_pad" in result.stdout
     assert load(out)["outcome"] == "landed_on_pad"
     # and it never imports ROS
-    code = ("import sys, interface.analyze as a; a.analyze(sys.argv[1], sys.argv[2], plots=False); "
+    code = ("import sys, landing_eval.analyze as a; a.analyze(sys.argv[1], sys.argv[2], plots=False); "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('rospy', 'rosbag', 'roslib', 'genpy', 'rosgraph')]; "
             "print('ROS modules:', bad); sys.exit(1 if bad else 0)")
     result = subprocess.run([sys.executable, "-c", code, flight, str(tmp_path / "out2")], cwd=SRC,
@@ -337,7 +337,7 @@ def test_the_script_finds_its_package_in_a_clean_environment(flight, tmp_path):
 
 def test_reading_is_the_same_with_and_without_the_index(flight):
     """The recovery reader (no index) and rosbags (index) decode the same messages."""
-    from interface.analysis_bag import _read_by_scanning
+    from landing_eval.analysis_bag import _read_by_scanning
     indexed = read_bag(flight, analyze.TOPICS)
     scanned = _read_by_scanning(flight, set(analyze.TOPICS), "test", {}, {})
     assert set(indexed.messages) == set(scanned.messages)

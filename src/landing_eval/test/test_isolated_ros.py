@@ -5,7 +5,7 @@ import subprocess
 import sys
 import time
 
-from mujoco_sim.isolated_ros import graph_unconnected, reconnect_subscribers, unconnected_subscriptions
+from landing_eval.isolated_ros import graph_unconnected, reconnect_subscribers, unconnected_subscriptions
 
 STATE = ([("/clock", ["/sim"]), ("/cmd", ["/tracker", "/joystick"])],
          [("/clock", ["/tracker", "/rec"]), ("/cmd", ["/sim"]), ("/nobody_publishes", ["/rec"])], [])

@@ -1,12 +1,11 @@
 """analyze: report of one flight from its ROS 1 bag, without ROS (rosbags, numpy, matplotlib).
 
-    rosrun interface analyze BAG --out DIR
-    .venv/bin/python -m interface.analyze BAG --out DIR     # plain shell: no ROS sourced, no master
-    .venv/bin/python src/interface/scripts/analyze BAG --out DIR
+    rosrun landing_eval analyze BAG --out DIR
+    .venv/bin/python -m landing_eval.analyze BAG --out DIR     # plain shell: no ROS sourced, no master
+    .venv/bin/python src/landing_eval/scripts/analyze BAG --out DIR
 
-(``python -m interface.analyze`` needs the package on the path: from a plain shell run it as
-``PYTHONPATH=src/interface/src .venv/bin/python -m interface.analyze ...``, or use the script, which adds
-the path itself.)
+(``python -m landing_eval.analyze`` finds the package through the .pth file `make build` writes into the
+venv, so it works from any directory of a shell where nothing is sourced.)
 
 Writes to DIR: ``metrics.json`` (outcome, touchdown error, time to land, tracking / vision / prediction
 errors, state timeline, supervisor decisions, battery, wind; a metric the bag cannot give is null and
@@ -29,7 +28,7 @@ import numpy as np
 
 if __package__ in (None, ""):  # run as a file: make the package importable
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    __package__ = "interface"  # noqa: A001
+    __package__ = "landing_eval"  # noqa: A001
 
 from . import analysis_metrics as M  # noqa: E402
 from .analysis_bag import BagError, Flat, read_bag  # noqa: E402
@@ -361,7 +360,7 @@ def compute_metrics(d, contents, scenario=None):
 
 
 class _Touchdown:
-    """What interface.scoring expects of a landing_msgs/Touchdown."""
+    """What landing_eval.scoring expects of a landing_msgs/Touchdown."""
 
     def __init__(self, td):
         self.surface, self.crashed, self.pad_error = td["surface_code"], td["crashed"], td["pad_error_m"]

@@ -7,7 +7,7 @@ import pytest
 import yaml
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from interface import scenario, scoring  # noqa: E402
+from landing_eval import scenario, scoring  # noqa: E402
 
 SPEC_EXAMPLE = """
 name: car_straight_10ms
@@ -92,7 +92,7 @@ def test_outcomes():
 
 
 def test_launch_arguments_carry_every_condition_of_the_scenario(tmp_path):
-    from interface import runner
+    from landing_eval import runner
     text = SPEC_EXAMPLE.replace("temp: 15}", "temp: 15, drone_speed: 18.0}")
     args = dict(a.split(":=", 1) for a in runner.launch_arguments(scenario.load(write(tmp_path, text))))
     assert args["vehicle"] == "car" and args["speed"] == "10.0" and args["seed"] == "7"

@@ -3,7 +3,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from interface import benchmark  # noqa: E402
+from landing_eval import benchmark  # noqa: E402
 
 
 def test_expectations():

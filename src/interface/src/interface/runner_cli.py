@@ -1,7 +1,0 @@
-"""`python -m interface.runner_cli SCENARIO --out DIR`: run_scenario for subprocesses of the benchmark."""
-import sys
-
-from .runner import main
-
-if __name__ == "__main__":
-    sys.exit(main())

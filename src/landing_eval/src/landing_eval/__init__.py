@@ -1,0 +1,1 @@
+"""Evaluation: scenario schema and runner, benchmark (local or Ray), flight analysis, isolated-master tooling."""
