@@ -17,7 +17,7 @@ MEASURES = ("platform_speed", "target_lost_s", "camera_silence_s", "imu_silence_
             "sonar_silence_s")
 THRESHOLDS = {"below": "lower", "at_or_below": "lower", "above": "upper", "at_or_above": "upper"}
 ROW_KEYS = {"param", "measure", "unit", "valid", "flag", "blocks_landing", "reason", "message"} | set(THRESHOLDS)
-TOP_KEYS = {"conditions", "drone_max_horizontal_speed", "sensor_timeout_s"}
+TOP_KEYS = {"conditions", "drone_max_horizontal_speed", "sensor_timeout_s", "gps_timeout_s"}
 
 
 class ConditionTableError(ValueError):
@@ -64,9 +64,10 @@ class ConditionRow:
 
 
 class ConditionTable:
-    def __init__(self, rows, path="<table>", sensor_timeout_s=None, drone_max_horizontal_speed=None):
+    def __init__(self, rows, path="<table>", sensor_timeout_s=None, drone_max_horizontal_speed=None, gps_timeout_s=None):
         self.rows, self.path = list(rows), path
         self.sensor_timeout_s, self.drone_max_horizontal_speed = sensor_timeout_s, drone_max_horizontal_speed
+        self.gps_timeout_s = gps_timeout_s
 
     def __iter__(self):
         return iter(self.rows)
@@ -161,8 +162,8 @@ def parse_table(data, path="<table>"):
     rows = data["conditions"]
     if not isinstance(rows, dict) or not rows:
         raise ConditionTableError("%s: key 'conditions' must be a non-empty mapping name -> row" % path)
-    extras = {key: _number(data[key], key, path) for key in ("sensor_timeout_s", "drone_max_horizontal_speed")
-              if key in data}
+    extras = {key: _number(data[key], key, path) for key in ("sensor_timeout_s", "drone_max_horizontal_speed",
+                                                             "gps_timeout_s") if key in data}
     return ConditionTable([_parse_row(str(name), spec, path) for name, spec in rows.items()], path, **extras)
 
 

@@ -33,6 +33,10 @@ def launch_arguments(s):
     }
     if start != "on_pad":
         args.update(start_x=start["x"], start_y=start["y"], start_z=start["z"])
+    realism = s["realism"]
+    args.update(realism=realism["profile"], realism_overrides=json.dumps(realism["overrides"], separators=(",", ":")),
+                # The stack is told how its drone's firmware reports velocity (a calibration fact, not truth).
+                flow_coupling=str(realism["values"]["flow_surface_coupling"]).lower())
     if "drone_speed" in c:
         args["drone_speed"] = c["drone_speed"]
     return ["%s:=%s" % (k, v) for k, v in args.items()]
@@ -285,9 +289,10 @@ class FlightMonitor:
         return ((drone.x - pad.x) ** 2 + (drone.y - pad.y) ** 2) ** 0.5
 
 
-def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True):
-    """Run one scenario; returns the result dict (also written to out_dir/result.json)."""
-    s = scenario_mod.load(scenario_path)
+def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None):
+    """Run one scenario (in the realism profile ``realism`` if given, else the scenario's); returns the
+    result dict (also written to out_dir/result.json)."""
+    s = scenario_mod.load(scenario_path, realism)
     s["_needs_tracker"] = landing_stack
     s["_supervisor"] = supervisor and landing_stack
     os.makedirs(out_dir, exist_ok=True)
@@ -301,7 +306,9 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
               "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s)
     wall_start = time.monotonic()
     wall_timeout = wall_timeout or max(300.0, 4.0 * s["time_limit_s"])
-    result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path)}
+    result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path),
+              "realism": {"profile": s["realism"]["profile"], "overrides": s["realism"]["overrides"],
+                          "values": s["realism"]["values"]}}
     with IsolatedLaunch(launch, os.path.join(out_dir, "launch.log")) as ros:
         os.environ["ROS_MASTER_URI"] = ros.master_uri
         ros.wait_for_master()
@@ -345,17 +352,20 @@ def main(argv=None):
     parser.add_argument("--wall-timeout", type=float, default=None, help="wall-clock limit [s]")
     parser.add_argument("--no-landing-stack", action="store_true", help="simulator and vehicle only")
     parser.add_argument("--no-supervisor", action="store_true", help="landing stack without the supervisor")
+    parser.add_argument("--realism", choices=("ideal", "realistic", "harsh"), default=None,
+                        help="realism profile of the simulated world (default: the scenario's, else realistic); "
+                             "single keys the scenario overrides stay overridden")
     args = parser.parse_args(argv)
     try:
         result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack,
-                     supervisor=not args.no_supervisor)
+                     supervisor=not args.no_supervisor, realism=args.realism)
     except scenario_mod.ScenarioError as err:
         print("run_scenario: %s" % err, file=sys.stderr)
         return 2
     except (RuntimeError, TimeoutError) as err:
         print("run_scenario: %s (logs in %s)" % (err, args.out), file=sys.stderr)
         return 3
-    summary = "%(name)s: %(outcome)s" % result
+    summary = "%s (%s): %s" % (result["name"], result["realism"]["profile"], result["outcome"])
     if result["touchdown_error_m"] is not None:
         summary += ", touchdown error %.3f m" % result["touchdown_error_m"]
     if result["time_to_land_s"] is not None:

@@ -49,7 +49,7 @@ def _mapping(value, where, known):
 def validate(data, source):
     """Validated scenario dict with every optional field filled in."""
     top = _mapping(data, source, ("name", "seed", "time_limit_s", "platform", "drone", "conditions", "sensors",
-                                  "events", "expect", "description", "supervisor", "tracking"))
+                                  "events", "expect", "description", "supervisor", "tracking", "realism"))
     if "name" not in top or not isinstance(top["name"], str) or not top["name"]:
         raise ScenarioError("%s: field 'name' is required (a non-empty string)" % source)
     out = {"name": top["name"], "description": str(top.get("description", "")),
@@ -99,6 +99,8 @@ def validate(data, source):
     out["sensors"] = {"camera_noise": _number(sensors.get("camera_noise", 0.0), where + ".camera_noise'", 0.0, 1.0),
                       "camera_fps": _number(sensors.get("camera_fps", 30.0), where + ".camera_fps'", 1.0, 120.0)}
 
+    out["realism"] = realism_of(top.get("realism"), "%s: field 'realism'" % source)
+
     events = top.get("events", []) or []
     if not isinstance(events, list):
         raise ScenarioError("%s: field 'events': expected a list, got %r" % (source, events))
@@ -114,6 +116,29 @@ def validate(data, source):
         for outcome in outcomes if isinstance(outcomes, list) else [outcomes]:
             _choice(outcome, "%s: field 'expect.outcome'" % source, OUTCOMES)
     return out
+
+
+def realism_of(selection, where, profile=None):
+    """The realism a scenario asks for (a profile name, or a mapping {profile: NAME, key: value, ...};
+    default realistic), checked against the simulator's profiles: {"profile": name, "overrides": {...},
+    "values": {every key: value in force}}. ``profile`` (e.g. from --realism) replaces the scenario's profile
+    but not its single keys."""
+    from mujoco_sim import realism
+    from mujoco_sim.config import ConfigError
+    if selection is None:
+        selection = {}
+    elif isinstance(selection, str):
+        selection = {"profile": selection}
+    if not isinstance(selection, dict):
+        raise ScenarioError("%s: expected a profile name (%s) or a mapping {profile: NAME, key: value}, got %r" % (
+            where, " | ".join(realism.PROFILES), selection))
+    selection = dict(selection, **({"profile": profile} if profile else {}))
+    try:
+        name, values = realism.resolve(realism.shipped_profiles(), selection, where)
+    except ConfigError as err:
+        raise ScenarioError(str(err)) from err
+    overrides = {k: values[k] for k in selection if k != "profile"}
+    return {"profile": name, "overrides": overrides, "values": values}
 
 
 def _event(event, where):
@@ -142,8 +167,8 @@ def _event(event, where):
     return out
 
 
-def load(path):
-    """Read and validate one scenario file."""
+def load(path, realism_profile=None):
+    """Read and validate one scenario file; ``realism_profile`` replaces the profile it asks for."""
     if not os.path.isfile(path):
         raise ScenarioError("%s: scenario file not found" % path)
     try:
@@ -151,4 +176,8 @@ def load(path):
             data = yaml.safe_load(stream)
     except yaml.YAMLError as err:
         raise ScenarioError("%s: not valid YAML: %s" % (path, err)) from err
-    return validate(data, path)
+    scenario = validate(data, path)
+    if realism_profile:
+        scenario["realism"] = realism_of(dict(scenario["realism"]["overrides"]), "%s: field 'realism'" % path,
+                                         realism_profile)
+    return scenario

@@ -13,6 +13,7 @@ The stochastic models every effect draws from are here too, each with its own se
 """
 import collections
 import math
+import os
 
 import numpy as np
 
@@ -76,6 +77,14 @@ SCHEMA = {
 }
 PROFILES = ("ideal", "realistic", "harsh")
 DEFAULT_PROFILE = "realistic"
+
+
+def shipped_profiles():
+    """The profile table of the package's config/sim.yaml, validated: {profile: {key: value}}."""
+    from .config import load_yaml
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "config", "sim.yaml")
+    section = load_yaml(os.path.normpath(path)).get("realism") or {}
+    return validate_table(section.get("table"), section.get("profiles"), path)
 
 
 def validate_table(table, profiles, source):

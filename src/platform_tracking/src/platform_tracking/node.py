@@ -107,6 +107,7 @@ class EstimatorNode:
         rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
         if self.surface.enabled:
             rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad, queue_size=5, tcp_nodelay=True)
+            rospy.Subscriber("vehicle/gps/odom", Odometry, self.on_vehicle, queue_size=5, tcp_nodelay=True)
 
     def _new_estimator(self):
         return DroneEstimator(self.params, log=lambda line: rospy.loginfo("drone_estimator: %s", line),
@@ -118,6 +119,13 @@ class EstimatorNode:
             return warn_dropped("kalman_platform_odom", "non-finite value")
         with self.lock:
             self.estimator.pad(stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z))
+
+    def on_vehicle(self, msg):
+        v, w = msg.twist.twist.linear, msg.twist.twist.angular.z
+        if not finite(v.x, v.y) or msg.twist.covariance[0] <= 0.0:
+            return warn_dropped("vehicle/gps/odom", "no finite velocity with a variance")
+        with self.lock:
+            self.estimator.vehicle(stamp_of(msg), (v.x, v.y), w if math.isfinite(w) else 0.0)
 
     def _at(self, t):
         """Called with the lock held before using a measurement stamped ``t``: restarts the filter
