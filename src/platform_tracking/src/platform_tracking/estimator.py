@@ -95,39 +95,74 @@ class AxisFilter:
 
 
 class HorizontalFilter:
-    """Kalman filter of the horizontal position with state [x, y, bias_forward, bias_left].
+    """Kalman filter of the horizontal position with state [x, y, b_forward, b_left, a, c].
 
-    The optical flow measures the heading-frame velocity plus a slowly varying bias *in the heading
-    frame* (it comes from the camera and its mounting, which turn with the drone), so the motion
-    model is  p' = R(yaw) (flow - bias),  bias' = white noise. GPS fixes measure p."""
+    The drone reports its velocity in its heading frame: its firmware's optical flow, scaled by the
+    height it measures (a scale error of a few per cent), with a small bias from the camera and its
+    mounting (they turn with the drone). To the world it is turned with the IMU's yaw, which drifts (no
+    magnetometer in the loop). Together:
 
-    def __init__(self, q_position, q_bias, velocity_std, initial_bias_std):
+        p' = R(yaw) (a f + c J f - b) + u,   J f = (-f_left, f_forward)
+
+    where ``a`` = cos(drift) / scale and ``c`` = -sin(drift) / scale (a turn and a scaling of the flow, linear
+    in the state), ``b`` the bias and ``u`` the part of the vehicle's velocity the flow did not see (over the
+    vehicle, flow_surface.py). b, a and c are random walks; the GPS velocity against the flow measures
+    them while the drone moves (at a hover a and c are unobservable, and matter as little), GPS fixes
+    measure p."""
+
+    def __init__(self, q_position, q_bias, velocity_std, initial_bias_std, q_scale=0.0, initial_scale_std=0.0):
         self.q_position, self.q_bias, self.velocity_std = q_position, q_bias, velocity_std
         self.initial_bias_std = initial_bias_std
-        self.x = np.zeros(4)
-        self.P = np.zeros((4, 4))
+        self.q_scale, self.initial_scale_std = q_scale, initial_scale_std
+        self.x = np.zeros(6)
+        self.P = np.zeros((6, 6))
         self.initialised = False
 
     def reset(self, position_xy, variance):
-        self.x = np.array([position_xy[0], position_xy[1], 0.0, 0.0])
-        self.P = np.diag([variance, variance, self.initial_bias_std ** 2, self.initial_bias_std ** 2])
+        self.x = np.array([position_xy[0], position_xy[1], 0.0, 0.0, 1.0, 0.0])
+        self.P = np.diag([variance, variance, self.initial_bias_std ** 2, self.initial_bias_std ** 2,
+                          self.initial_scale_std ** 2, self.initial_scale_std ** 2])
         self.initialised = True
 
     @property
     def bias(self):
         return self.x[2:4]
 
-    def world_velocity(self, flow_heading, yaw):
-        """World velocity from a heading-frame flow reading, bias removed."""
-        return np.array(heading_to_world(flow_heading[0] - self.x[2], flow_heading[1] - self.x[3], yaw))
+    @property
+    def scale_and_turn(self):
+        """(a, c): the flow's correction; a = 1, c = 0 for an exact flow and yaw."""
+        return self.x[4], self.x[5]
 
-    def predict_flow(self, dt, flow_heading, yaw):
+    @staticmethod
+    def _rotation(yaw):
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.array([[c, -s], [s, c]])
+
+    def _velocity_jacobian(self, flow_heading, yaw):
+        """d(world velocity) / d(state): zero for the position, -R for the bias, R f and R J f for a, c."""
+        rotation = self._rotation(yaw)
+        f = np.array(flow_heading[:2], dtype=float)
+        jacobian = np.zeros((2, 6))
+        jacobian[:, 2:4] = -rotation
+        jacobian[:, 4] = rotation @ f
+        jacobian[:, 5] = rotation @ np.array([-f[1], f[0]])
+        return jacobian
+
+    def world_velocity(self, flow_heading, yaw, unseen=(0.0, 0.0)):
+        """World velocity from a heading-frame flow reading: scaled and turned by (a, c), bias removed, plus
+        the velocity the flow did not see."""
+        f0, f1 = flow_heading[0], flow_heading[1]
+        a, c = self.x[4], self.x[5]
+        forward, left = a * f0 - c * f1 - self.x[2], a * f1 + c * f0 - self.x[3]
+        vx, vy = heading_to_world(forward, left, yaw)
+        return np.array([vx + unseen[0], vy + unseen[1]])
+
+    def predict_flow(self, dt, flow_heading, yaw, unseen=(0.0, 0.0)):
         if dt <= 0.0 or not self.initialised:
             return
-        c, s = math.cos(yaw), math.sin(yaw)
-        self.x[:2] += self.world_velocity(flow_heading, yaw) * dt
-        F = np.eye(4)
-        F[0:2, 2:4] = -dt * np.array([[c, -s], [s, c]])
+        self.x[:2] += self.world_velocity(flow_heading, yaw, unseen) * dt
+        F = np.eye(6)
+        F[0:2, :] += dt * self._velocity_jacobian(flow_heading, yaw)
         self._propagate(F, dt)
 
     def predict_world(self, dt, velocity_world):
@@ -135,20 +170,18 @@ class HorizontalFilter:
         if dt <= 0.0 or not self.initialised:
             return
         self.x[:2] += np.asarray(velocity_world[:2]) * dt
-        self._propagate(np.eye(4), dt)
+        self._propagate(np.eye(6), dt)
 
     def _propagate(self, F, dt):
         q = self.q_position * dt + (self.velocity_std * dt) ** 2
-        self.P = F @ self.P @ F.T + np.diag([q, q, self.q_bias * dt, self.q_bias * dt])
+        self.P = F @ self.P @ F.T + np.diag([q, q, self.q_bias * dt, self.q_bias * dt,
+                                             self.q_scale * dt, self.q_scale * dt])
 
-    def update_velocity(self, velocity_world, flow_heading, yaw, variance):
-        """GPS velocity against the flow: measures the flow bias. The predicted measurement is
-        R(yaw) (flow - bias), so H = [0 | -R(yaw)]; ``variance`` covers both sensors' noise."""
-        c, s = math.cos(yaw), math.sin(yaw)
-        rotation = np.array([[c, -s], [s, c]])
-        innovation = np.asarray(velocity_world[:2]) - self.world_velocity(flow_heading, yaw)
-        H = np.zeros((2, 4))
-        H[:, 2:4] = -rotation
+    def update_velocity(self, velocity_world, flow_heading, yaw, variance, unseen=(0.0, 0.0)):
+        """GPS velocity against the flow: measures the flow's bias, scale and turn. ``variance`` covers
+        both sensors' noise."""
+        innovation = np.asarray(velocity_world[:2]) - self.world_velocity(flow_heading, yaw, unseen)
+        H = self._velocity_jacobian(flow_heading, yaw)
         S = H @ self.P @ H.T + variance * np.eye(2)
         if float(innovation @ np.linalg.solve(S, innovation)) > 25.0:
             return False  # e.g. flow and fix taken across a hard acceleration
@@ -193,9 +226,11 @@ class DroneEstimator:
         self.surface = surface           # FlowSurface, or None: the flow is over the ground
         self.pad_state = None            # (time, position, velocity) of the pad, world frame
         self.vehicle_report = None       # (time, velocity xy, yaw rate) the vehicle reported
+        self.unseen_velocity = (None, np.zeros(2))  # (time, world xy) of the vehicle's velocity the flow did not see
         self.history = collections.deque()  # (time, position, velocity) after each prediction
         self.horizontal = HorizontalFilter(params.position_process_noise, params.flow_bias_process_noise,
-                                           params.flow_velocity_std, params.initial_flow_bias_std)
+                                           params.flow_velocity_std, params.initial_flow_bias_std,
+                                           params.flow_scale_process_noise, params.initial_flow_scale_std)
         self.vertical = AxisFilter(params.altitude_process_noise, params.flow_velocity_std)
         self.time = None                 # time the filters are at
         self.orientation = None          # last IMU orientation (w, x, y, z)
@@ -225,7 +260,7 @@ class DroneEstimator:
         fresh, else the last GPS velocity while that is fresh, else none (the position then holds
         while its variance grows)."""
         if self._flow_fresh(t):
-            vx, vy = self.horizontal.world_velocity(self.flow_heading, self.yaw)
+            vx, vy = self.horizontal.world_velocity(self.flow_heading, self.yaw, self.unseen_velocity[1])
             return np.array([vx, vy, self.flow_heading[2]])
         if self.gps_velocity is not None and t - self.gps_velocity_time <= self.p.flow_timeout:
             return np.array(self.gps_velocity, dtype=float)
@@ -239,7 +274,7 @@ class DroneEstimator:
         if dt <= 0.0:
             return  # a late message is used as if taken now: its age is below one sample period
         if self._flow_fresh(self.time):
-            self.horizontal.predict_flow(dt, self.flow_heading, self.yaw)
+            self.horizontal.predict_flow(dt, self.flow_heading, self.yaw, self.unseen_velocity[1])
         else:
             self.horizontal.predict_world(dt, self._velocity(self.time))
         self.vertical.predict(dt, self._velocity(self.time)[2])
@@ -301,14 +336,10 @@ class DroneEstimator:
         return True
 
     def flow(self, t, vx_heading, vy_heading, vz):
-        """Navdata optical-flow velocity: forward/left in the heading frame, vertical [m/s]. Over the
-        vehicle, the part of the pad's velocity the flow took off is added back (flow_surface.py)."""
+        """Navdata velocity: forward/left in the drone's heading frame, vertical [m/s]. Over the vehicle, the
+        part of the vehicle's velocity the flow did not see is kept beside it (``unseen_velocity``)."""
         self._advance(t)
-        seen = self._seen_pad_velocity(t)
-        if seen is not None:
-            c, s = math.cos(self.yaw), math.sin(self.yaw)
-            vx_heading += c * seen[0] + s * seen[1]
-            vy_heading += -s * seen[0] + c * seen[1]
+        self.unseen_velocity = (t, self._unseen_velocity(t))
         self.flow_heading = (vx_heading, vy_heading, vz)
         self.flow_time = t
         return True
@@ -333,18 +364,24 @@ class DroneEstimator:
             return self.pad_state[2][:2]
         return None
 
-    def _seen_pad_velocity(self, t):
-        if self.surface is None or not self.surface.enabled or self.pad_state is None or not self.ready:
-            return None
-        pad_t, pad_position, pad_velocity = self.pad_state
-        vehicle_velocity = self._vehicle_velocity(t)
-        if abs(t - pad_t) > PAD_MAX_AGE or vehicle_velocity is None:
-            return None
-        seen = self.surface.seen_pad_velocity(self.estimate(t).position, self.orientation,
-                                              pad_position + pad_velocity * (t - pad_t), vehicle_velocity)
-        if seen.any():
+    def _unseen_velocity(self, t):
+        """The vehicle's velocity the flow does not see at ``t`` (world x, y): w v_vehicle (flow_surface.py),
+        blended in over the firmware's response time as the firmware blends each flow reading into its
+        estimate (its accelerometer carries the fast part). Zero away from the vehicle or without a pad."""
+        last_t, last = self.unseen_velocity
+        target = np.zeros(2)
+        if self.surface is not None and self.surface.enabled and self.pad_state is not None and self.ready:
+            pad_t, pad_position, pad_velocity = self.pad_state
+            vehicle_velocity = self._vehicle_velocity(t)
+            if abs(t - pad_t) <= PAD_MAX_AGE and vehicle_velocity is not None:
+                target = self.surface.seen_pad_velocity(self.estimate(t).position, self.orientation,
+                                                        pad_position + pad_velocity * (t - pad_t), vehicle_velocity)
+        if target.any():
             self.counters["flow_over_vehicle"] += 1
-        return seen
+        if last_t is None or t <= last_t:
+            return target
+        return last + (1.0 - math.exp(-(t - last_t) / self.surface.p.flow_time_constant)) * (target - last) \
+            if self.surface is not None else target
 
     def gps(self, t, position, velocity=None):
         """GPS fix taken at ``t``: world position [m] and optionally world velocity [m/s]; returns whether it
@@ -380,7 +417,8 @@ class DroneEstimator:
         if velocity is not None and self.p.use_gps_velocity and self._flow_fresh(t):
             before = self.horizontal.x[:2].copy()
             self.horizontal.update_velocity(velocity, self.flow_heading, self.yaw,
-                                            self.p.gps_velocity_std ** 2 + self.p.flow_velocity_std ** 2)
+                                            self.p.gps_velocity_std ** 2 + self.p.flow_velocity_std ** 2,
+                                            self.unseen_velocity[1])
             self.pending_correction[:2] += self.horizontal.x[:2] - before
         if self.p.use_gps_altitude and len(position) > 2:
             if not self.vertical.initialised:

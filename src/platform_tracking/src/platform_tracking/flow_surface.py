@@ -9,9 +9,13 @@ So, with ``w`` that weight and ``v_pad`` the vehicle's velocity:
     navdata velocity = v_drone - w v_pad          (the estimator adds w v_pad back)
     the drone flies at = command + w v_pad         (the tracker takes w v_pad off its command)
 
-The weight comes from the drone's estimated pose, the predicted pad and the vehicle's top (a rectangle
-around the pad, config/flow_surface_<vehicle>.yaml): the stack knows its drone's firmware as a
-calibration would tell it, not from the simulator.
+The estimator works ``w v_pad`` out and publishes it (ardrone/flow_unseen_velocity); the tracker takes off
+exactly that. Being the same, an error in it does not move the drone off the pad: the estimate then
+believes the drone flies at its command while it drifts by the error, the vision fixes (placed with the
+estimate) show the pad drifting the other way, and the prediction's velocity, the tracker's feed-forward,
+makes up for it. The weight comes from the drone's estimated pose, the predicted pad and the vehicle's
+top (a rectangle around the pad, config/flow_surface_<vehicle>.yaml): the stack knows its drone's
+firmware as a calibration would tell it, not from the simulator.
 """
 import math
 

@@ -1,13 +1,16 @@
 """The two thin ROS nodes of this package; all logic lives in estimator.py and state_machine.py.
 
 drone_estimator  ardrone/imu, ardrone/navdata, ardrone/gps/odom, ardrone/altimeter, ardrone/sonar_height
+                 (and, with ~flow_surface/enabled, kalman_platform_odom and vehicle/gps/odom)
                  -> ardrone/odom_estimate (nav_msgs/Odometry in `world`, child ardrone/base_link, at the
                  IMU rate; twist.linear is the WORLD-frame velocity, as on ardrone/gps/odom and the
-                 ground truth; twist.angular the body rates from the IMU).
+                 ground truth; twist.angular the body rates from the IMU), and ardrone/flow_unseen_velocity
+                 (geometry_msgs/Vector3Stamped, world: the vehicle's velocity the flow does not see, at
+                 the navdata rate; flow_surface.py).
 
 platform_tracking ardrone/odom_estimate, kalman_prediction_path, kalman_platform_odom, ardrone/navdata,
-                 ardrone/sonar_height, ardrone/imu, platform/current_platform_position_in_ardrone (only
-                 its stamp: when the pad was last seen), landing_allowed (std_msgs/Bool, default true) and the
+                 ardrone/sonar_height, ardrone/flow_unseen_velocity, platform/current_platform_position_in_ardrone
+                 (only when it arrives: the pad was seen), landing_allowed (std_msgs/Bool, default true) and the
                  operator requests -> ardrone/cmd_vel at rate_hz (sim time), ardrone/takeoff and
                  ardrone/land as one-shot actions, platform_tracking/state (std_msgs/String, latched,
                  on every change), platform_tracking/target (geometry_msgs/PointStamped, world: where the
@@ -31,7 +34,7 @@ import threading
 
 import numpy as np
 import rospy
-from geometry_msgs.msg import PointStamped, Twist
+from geometry_msgs.msg import PointStamped, Twist, Vector3Stamped
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
 from landing_msgs.rospy_node import init_node, spin
@@ -59,7 +62,7 @@ def warn_dropped(topic, why):
     rospy.logwarn_throttle(WARN_PERIOD, "dropped a message on %s: %s" % (rospy.resolve_name(topic), why))
 
 
-def load_params(cls, check=None, namespace="~", exclude=("flow_surface",)):
+def load_params(cls, check=None, namespace="~", exclude=()):
     """The node's private parameters (or those of a sub-namespace) as ``cls``; a missing or bad one is fatal
     and named. Sub-namespaces in ``exclude`` are another class's."""
     source = "%s parameters" % rospy.resolve_name(namespace)
@@ -88,16 +91,17 @@ def wait_for_clock():
 # ------------------------------------------------------------------------------------------------
 def load_flow_surface():
     """The drone's flow model over the vehicle, from ~flow_surface (config/flow_surface_<vehicle>.yaml)."""
-    return FlowSurface(load_params(FlowSurfaceParams, check=True, namespace="~flow_surface", exclude=()))
+    return FlowSurface(load_params(FlowSurfaceParams, check=True, namespace="~flow_surface"))
 
 
 class EstimatorNode:
     def __init__(self):
-        self.params = load_params(EstimatorParams)
+        self.params = load_params(EstimatorParams, exclude=("flow_surface",))
         self.surface = load_flow_surface()
         self.lock = threading.Lock()
         self.estimator = self._new_estimator()
         self.publisher = rospy.Publisher("ardrone/odom_estimate", Odometry, queue_size=10)
+        self.pub_unseen = rospy.Publisher("ardrone/flow_unseen_velocity", Vector3Stamped, queue_size=10)
         self.lockstep = LockstepAcker("ardrone/imu")
         # tcp_nodelay throughout the control loop: Nagle's algorithm would deliver sensor messages in bursts.
         rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=20, tcp_nodelay=True)
@@ -156,6 +160,12 @@ class EstimatorNode:
         with self.lock:
             self._at(t)
             self.estimator.flow(t, msg.vx, msg.vy, msg.vz)
+            unseen = self.estimator.unseen_velocity[1]
+        if self.surface.enabled:
+            correction = Vector3Stamped()
+            correction.header.stamp, correction.header.frame_id = msg.header.stamp, self.params.frame_id
+            correction.vector.x, correction.vector.y = float(unseen[0]), float(unseen[1])
+            self.pub_unseen.publish(correction)
 
     def on_gps(self, msg):
         p, v = msg.pose.pose.position, msg.twist.twist.linear
@@ -235,10 +245,10 @@ def build_prediction(path, odom):
 class TrackingNode:
     def __init__(self):
         self.params = load_params(TrackingParams, check=True)
-        self.surface = load_flow_surface()
         self.lock = threading.Lock()
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
-        self.estimate = None          # (stamp, DroneState without sonar, orientation w, x, y, z)
+        self.estimate = None          # (stamp, DroneState without sonar)
+        self.unseen = None            # (stamp, world xy) of the pad's velocity the drone's flow does not see
         self.sonar = None             # median of the last three sonar ranges (a spurious echo is one of them), or None
         self.sonar_ranges = collections.deque(maxlen=3)
         self.navdata_state = None
@@ -260,6 +270,7 @@ class TrackingNode:
         rospy.Subscriber("kalman_prediction_path", Path, self.on_path, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=5, tcp_nodelay=True)
+        rospy.Subscriber("ardrone/flow_unseen_velocity", Vector3Stamped, self.on_unseen, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
         rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, self.on_detection, queue_size=5, tcp_nodelay=True)
@@ -278,7 +289,13 @@ class TrackingNode:
             return warn_dropped("ardrone/odom_estimate", "frame '%s', expected 'world'" % msg.header.frame_id)
         state = DroneState(np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]), yaw_from_quaternion(q.w, q.x, q.y, q.z))
         with self.lock:
-            self.estimate = (stamp_of(msg), state, (q.w, q.x, q.y, q.z))
+            self.estimate = (stamp_of(msg), state)
+
+    def on_unseen(self, msg):
+        if not finite(msg.vector.x, msg.vector.y):
+            return warn_dropped("ardrone/flow_unseen_velocity", "non-finite value")
+        with self.lock:
+            self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]))
 
     def on_path(self, msg):
         if msg.header.frame_id not in WORLD_FRAMES:
@@ -359,10 +376,11 @@ class TrackingNode:
         now = rospy.Time.now()
         t = now.to_sec()
         with self.lock:
-            drone, orientation = None, None
+            drone = None
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
-                state, orientation = self.estimate[1], self.estimate[2]
+                state = self.estimate[1]
                 drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
+            unseen = self.unseen[1] if self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE else None
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
                             force_land="force_land" in self.requests, landing_allowed=self.landing_allowed,
@@ -375,7 +393,7 @@ class TrackingNode:
         if out.send_land:
             self.pub_land.publish(Empty())
         if out.command is not None:
-            command = self._firmware_command(out.command, t, drone, orientation, inputs.pad)
+            command = self._firmware_command(out.command, drone, unseen)
             twist = Twist()
             twist.linear.x, twist.linear.y, twist.linear.z = command.vx, command.vy, command.vz
             twist.angular.z = command.yaw_rate
@@ -389,15 +407,12 @@ class TrackingNode:
             self.pub_target.publish(target)
         self.lockstep.ack(now)
 
-    def _firmware_command(self, command, t, drone, orientation, pad):
+    def _firmware_command(self, command, drone, unseen):
         """The drone flies its command relative to what its flow sees: over the vehicle, take off the part of
-        the pad's velocity the flow does not see (flow_surface.py)."""
-        if not self.surface.enabled or drone is None or pad is None or self.machine.state == State.LANDED:
+        the vehicle's velocity the flow does not see, as the estimator worked it out (flow_surface.py)."""
+        if drone is None or unseen is None or not unseen.any() or self.machine.state == State.LANDED:
             return command
-        seen = self.surface.seen_pad_velocity(drone.position, orientation, pad.position_at(t), pad.velocity)
-        if not seen.any():
-            return command
-        forward, left = TrackingController.to_heading_frame(seen, drone.yaw)
+        forward, left = TrackingController.to_heading_frame(unseen, drone.yaw)
         return dataclasses.replace(command, vx=command.vx - forward, vy=command.vy - left)
 
     def spin(self):
