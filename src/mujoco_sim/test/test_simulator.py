@@ -299,3 +299,103 @@ def test_faults_black_out_the_camera_and_show_a_false_target():
     assert during > before * 1.3  # a 1.0 x 0.6 m red object beside the 1 m pad
     run(sim, 5.0)
     assert red_mask(sim.render_camera()).sum() == pytest.approx(before, rel=0.1)
+
+
+# ----- realism (profile realistic unless a test says otherwise) ---------------------------------------------
+def hover_above_pad(sim, height, vehicle_velocity=(2.0, 0.0)):
+    """Place the drone ``height`` above the pad centre, level, and give the vehicle a velocity (kinematic)."""
+    pad = sim.pad_position()
+    sim._set_drone_pose((pad[0], pad[1], pad[2] + height), 0.0)
+    sim.data.qvel[sim.vehicle_qvel:sim.vehicle_qvel + 2] = vehicle_velocity
+    sim._mj.mj_forward(sim.model, sim.data)
+
+
+def test_the_optical_flow_follows_the_vehicle_when_it_fills_the_view():
+    sim = make_sim(realism="realistic", noise={"enabled": False})
+    sim.flow_scale = 1.0
+    for height, expected_weight in ((0.8, 1.0), (4.0, 0.0)):
+        hover_above_pad(sim, height)
+        measured = sim._flow_measurement(np.eye(3))
+        # The drone stands still: over the ground the flow reads 0, over the vehicle minus its velocity.
+        assert measured == pytest.approx((-2.0 * expected_weight, 0.0), abs=1e-6)
+        assert sim.surface_weight == pytest.approx(expected_weight)
+    ideal = make_sim(realism="ideal", noise={"enabled": False})
+    hover_above_pad(ideal, 0.8)
+    assert ideal._flow_measurement(np.eye(3)) == pytest.approx((0.0, 0.0))
+
+
+def test_the_reported_yaw_drifts_by_the_drift_process_and_the_attitude_tilts_with_the_accelerometer_bias():
+    sim = make_sim(realism="realistic", seed=4, noise={"enabled": True, "imu_orientation_std_deg": 0.0})
+    run(sim, 5.0)
+    quat, _, _ = sim.imu()
+    true_yaw = math.atan2(2 * (sim.drone_pose()[1][0] * sim.drone_pose()[1][3]), 1 - 2 * sim.drone_pose()[1][3] ** 2)
+    reported = math.atan2(2 * (quat[0] * quat[3] + quat[1] * quat[2]), 1 - 2 * (quat[2] ** 2 + quat[3] ** 2))
+    assert sim.yaw_drift() != 0.0
+    assert reported - true_yaw == pytest.approx(sim.yaw_drift(), abs=0.002)
+    drifts = []
+    for seed in range(25):
+        s = make_sim(realism="realistic", seed=seed)
+        s.data.time = 60.0
+        drifts.append(s.yaw_drift())
+    # The drift rate's std is 0.0005 rad/s: 0.03 rad after 60 s (the walk adds 0.004 rad once stepped).
+    assert np.std(drifts) == pytest.approx(0.03, rel=0.4)
+
+
+def test_sonar_outliers_come_at_their_rate():
+    sim = make_sim(realism="realistic", seed=2, noise={"enabled": False})
+    hover_above_pad(sim, 1.5, (0.0, 0.0))
+    readings = np.array([sim.sonar() for _ in range(4000)])
+    off = np.mean(~(np.abs(readings - 1.5 + 0.065) < 0.02))
+    assert off == pytest.approx(0.02, abs=0.008)
+
+
+def test_gps_drifts_slowly_and_drops_out_now_and_then():
+    sim = make_sim(realism="harsh", seed=3, noise={"enabled": False})
+    errors, missing = [], 0
+    for _ in range(3000):  # 10 minutes at 5 Hz, the physics not stepped: only time moves
+        sim.data.time += 0.2
+        fix = sim.gps()
+        if fix is None:
+            missing += 1
+            continue
+        errors.append(fix[0][:2] - sim.drone_pose()[0][:2])
+    errors = np.array(errors)
+    assert 0.01 < missing / 3000.0 < 0.2  # harsh: an outage of 6 s a minute
+    assert 0.8 < np.std(errors) < 3.0     # 2 m Gauss-Markov, one long record
+    ten_seconds = 50  # fixes
+    correlation = np.corrcoef(errors[:-ten_seconds, 0], errors[ten_seconds:, 0])[0, 1]
+    assert correlation > 0.6               # slowly drifting: exp(-10 / 60) = 0.85 apart 10 s
+
+
+def test_commands_reach_the_drone_after_the_link_latency_and_some_are_lost():
+    sim = make_sim(realism="realistic", seed=5)
+    sim.takeoff()
+    run(sim, 0.5)
+    assert sim.autopilot.mode != FlightMode.LANDED
+    sim.set_velocity_command(1.0, 0.0, 0.0, 0.0)
+    assert sim.command.vx == 0.0          # not there yet
+    sent = 0
+    while sim.command.vx == 0.0 and sent < 100:
+        sim.step()
+        sent += 1
+    assert 0.0 < sent * sim.dt < 0.1      # 30 ms +- 10 ms
+    link = sim.command_link
+    before = link.lost
+    for _ in range(3000):
+        sim.set_velocity_command(0.5, 0.0, 0.0, 0.0)
+    assert (link.lost - before) / 3000.0 == pytest.approx(0.03, abs=0.01)
+
+
+def test_the_realistic_camera_is_distorted_wider_rendered_and_its_brightness_wanders():
+    sim = make_sim(realism="realistic")
+    run(sim, 0.2)
+    image = sim.render_camera()
+    assert image.shape == (240, 320, 3)
+    assert sim.lens.render_fovy_deg > sim.camera_fovy  # barrel distortion: the corners see further out
+    assert sim.camera_distortion()[0] == pytest.approx(-0.2)
+    gains = [sim.exposure.gain(t) for t in np.arange(0.0, 300.0, 0.5)]
+    assert 0.05 < np.std(np.log(gains)) < 0.3
+    ideal = make_sim(realism="ideal")
+    run(ideal, 0.2)
+    ideal.render_camera()
+    assert ideal.lens.identity and ideal.exposure.gain(10.0) == 1.0

@@ -27,8 +27,9 @@ MeasurementOutcome DelayedFusion::addVision(double stamp, const Eigen::Vector3d&
 MeasurementOutcome DelayedFusion::addVehicleReport(double stamp, const VehicleReport& report)
 {
   return add(stamp, [=](PadMotionFilter& f) {
-    const MeasurementOutcome outcome =
-        f.addGps(stamp, report.pad_position, report.velocity, report.velocity_variance);
+    const MeasurementOutcome outcome = report.pad_position
+                                           ? f.addGps(stamp, *report.pad_position, report.velocity, report.velocity_variance)
+                                           : MeasurementOutcome::kIgnored;
     // The velocity is the pad's speed, seen before the fixes show a change of it; the heading holds the
     // track's heading through stops and reversals; the yaw rate is the turn rate through the corners.
     if (report.velocity)

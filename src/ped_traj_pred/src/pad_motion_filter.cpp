@@ -191,8 +191,19 @@ MeasurementOutcome PadMotionFilter::addGps(double stamp, const Eigen::Vector2d& 
     start_velocity = StartVelocity{ *velocity, velocity_variance };
   if (std::isfinite(stamp) && position_xy.allFinite())
     learnGpsOffset(stamp, position_xy);
-  return addFix<2>(Source::kGps, stamp, position_xy - gps_offset_, H,
-                   params_.gps_observation_covariance + gps_offset_variance_, start_velocity);
+  const MeasurementOutcome outcome = addFix<2>(Source::kGps, stamp, position_xy - gps_offset_, H,
+                                               params_.gps_observation_covariance + gps_offset_variance_,
+                                               start_velocity);
+  if (outcome == MeasurementOutcome::kAccepted || outcome == MeasurementOutcome::kInitialised ||
+      outcome == MeasurementOutcome::kReinitialised)
+  {
+    // The offset is one error shared by every fix, not noise that averages out: a track that GPS holds is
+    // no surer of where the pad is than of the offset (else the camera's first fixes would be outliers).
+    for (int j = 0; j < kModes; ++j)
+      for (const int i : { Model::kPx, Model::kPy })
+        P_[j](i, i) = std::max(P_[j](i, i), gps_offset_variance_);
+  }
+  return outcome;
 }
 
 void PadMotionFilter::learnGpsOffset(double stamp, const Eigen::Vector2d& position_xy)

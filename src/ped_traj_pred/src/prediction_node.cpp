@@ -195,16 +195,19 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   const geometry_msgs::Point& p = msg->pose.pose.position;
   const geometry_msgs::Quaternion& q = msg->pose.pose.orientation;
   VehicleReport report;
-  report.pad_position << p.x, p.y;
-  if (!gps_pad_offset_.isZero())
+  // Without a fix (a receiver in a dropout) the report still carries the vehicle's odometry; its position
+  // variance then says "unknown".
+  if (msg->pose.covariance[0] < kUnknownVariance)
   {
+    Eigen::Vector2d pad(p.x, p.y);
     // The receiver sits at the vehicle origin; the pad centre is offset in the vehicle frame.
-    report.pad_position += Eigen::Rotation2Dd(yawOf(q)) * gps_pad_offset_;
-  }
-  if (!report.pad_position.allFinite())
-  {
-    ROS_WARN_THROTTLE(5.0, "Dropping a GPS fix with NaN or inf on %s", gps_sub_.getTopic().c_str());
-    return;
+    pad += Eigen::Rotation2Dd(yawOf(q)) * gps_pad_offset_;
+    if (!pad.allFinite())
+    {
+      ROS_WARN_THROTTLE(5.0, "Dropping a GPS fix with NaN or inf on %s", gps_sub_.getTopic().c_str());
+      return;
+    }
+    report.pad_position = pad;
   }
   // The reported velocity (world frame) starts a track with a heading when vision is absent, and is the
   // pad's speed. The pad's offset from the receiver adds omega x offset, unknown here and at most a few cm/s.

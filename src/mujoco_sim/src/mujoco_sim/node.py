@@ -34,6 +34,7 @@ NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF:
                  FlightMode.FLYING: Navdata.STATE_FLYING, FlightMode.LANDING: Navdata.STATE_LANDING,
                  FlightMode.CRASHED: Navdata.STATE_CRASHED}
 _NOTHING = object()
+UNKNOWN_VARIANCE = 1e6  # covariance entry of a quantity not measured (the vehicle's position in a GPS dropout)
 WHEEL_JOINTS = ["summit_xl_front_left_wheel_joint", "summit_xl_front_right_wheel_joint",
                 "summit_xl_back_left_wheel_joint", "summit_xl_back_right_wheel_joint"]
 # Global condition parameters (thesis names) that change the simulated world, with their checks.
@@ -455,16 +456,16 @@ class SimNode:
         return odom
 
     def _vehicle_gps_message(self, stamp):
-        fix = self.sim.vehicle_gps()
-        if fix is None:
-            return None  # a dropout
-        (x, y, yaw), (vx, vy), yaw_rate = fix
+        position, yaw, (vx, vy), yaw_rate = self.sim.vehicle_gps()
+        x, y = position if position is not None else (0.0, 0.0)
         odom = Odometry(header=self._header(stamp, "world"), child_frame_id="summit_xl/base_link")
         _fill_pose(odom.pose.pose, (x, y, 0.0), _yaw_quaternion(yaw))
         _fill_vector(odom.twist.twist.linear, (vx, vy, 0.0))
         odom.twist.twist.angular.z = yaw_rate
         n = self.cfg["noise"]
-        odom.pose.covariance = _diag6(n["gps_position_std"] ** 2, math.radians(n["vehicle_heading_std_deg"]) ** 2)
+        # During a GPS dropout the vehicle's odometry goes on; its position is unknown (REP 105 style: a huge variance).
+        position_variance = n["gps_position_std"] ** 2 if position is not None else UNKNOWN_VARIANCE
+        odom.pose.covariance = _diag6(position_variance, math.radians(n["vehicle_heading_std_deg"]) ** 2)
         odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, n["vehicle_yaw_rate_std"] ** 2)
         return odom
 

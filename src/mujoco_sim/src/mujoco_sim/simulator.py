@@ -613,9 +613,7 @@ class Simulator:
 
     def vehicle_gps(self):
         """GPS-like pose (x, y, yaw), velocity (vx, vy) and yaw rate of the vehicle (its odometry), noisy, the
-        position with its own drifting error; None during a dropout."""
-        if self.vehicle_gps_outage.active(self.time):
-            return None
+        position with its own drifting error; during a GPS dropout the position is None (the odometry goes on)."""
         x, y, yaw = self.vehicle_pose()
         vx, vy, yaw_rate = self.vehicle_velocity()
         n = self.noise or {}
@@ -625,7 +623,8 @@ class Simulator:
         v = self._noise("vehicle_gps", n.get("gps_velocity_std", 0), 2)
         heading = self._noise("vehicle_gps", math.radians(n.get("vehicle_heading_std_deg", 0)))
         turn = self._noise("vehicle_gps", n.get("vehicle_yaw_rate_std", 0))
-        return (x + p[0], y + p[1], yaw + heading), (vx + v[0], vy + v[1]), yaw_rate + turn
+        position = None if self.vehicle_gps_outage.active(self.time) else (x + p[0], y + p[1])
+        return position, yaw + heading, (vx + v[0], vy + v[1]), yaw_rate + turn
 
     def flow_velocity(self):
         """Heading-frame velocity (forward, left, up) as the AR.Drone reports it in navdata: its firmware's

@@ -23,10 +23,11 @@
 namespace ped_traj_pred
 {
 /// One report of the vehicle's GPS receiver / odometry: the pad position (moved from the receiver to the
-/// pad centre) and, where reported (nullopt otherwise), its velocity, heading and yaw rate, with variances.
+/// pad centre; nullopt while the receiver has no fix) and, where reported (nullopt otherwise), its
+/// velocity, heading and yaw rate, with variances.
 struct VehicleReport
 {
-  Eigen::Vector2d pad_position = Eigen::Vector2d::Zero();  ///< [m]
+  std::optional<Eigen::Vector2d> pad_position;             ///< [m]
   std::optional<Eigen::Vector2d> velocity;                 ///< world [m/s]
   double velocity_variance = -1.0;                         ///< per axis [m^2/s^2]
   std::optional<double> heading;                           ///< [rad]
@@ -44,7 +45,7 @@ public:
   /// Vision fix taken at `stamp` [s]; see PadMotionFilter::addVision.
   MeasurementOutcome addVision(double stamp, const Eigen::Vector3d& position, double variance = -1.0);
   /// A vehicle report taken at `stamp` [s]: its GPS fix, then speed, heading and yaw rate (those reported),
-  /// fused as one measurement. Returns the outcome of the GPS fix.
+  /// fused as one measurement. Returns the outcome of the GPS fix (kIgnored without one).
   MeasurementOutcome addVehicleReport(double stamp, const VehicleReport& report);
 
   /// The filter with everything received fused in stamp order.
