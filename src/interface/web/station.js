@@ -197,8 +197,8 @@ function appendSample(state) {
     const end = list[list.length - 1];
     if (xy && (!end || state.t - end[0] >= period)) { list.push([state.t, xy[0], xy[1]]); }
   };
-  trail(history.pad, state.pad, 0.25);
-  trail(history.drone, state.drone ? [state.drone.x, state.drone.y] : null, 0.25);
+  trail(history.pad, state.pad, 0.2);
+  trail(history.drone, state.drone ? [state.drone.x, state.drone.y] : null, 0.2);
   const oldest = state.t - history.seconds;
   for (const key of ["plot", "pad", "drone"]) {
     let drop = 0;

@@ -55,7 +55,7 @@ def _pose(pose, *keys):
 
 
 class StationModel:
-    def __init__(self, console=None, history_s=60.0, sample_period_s=0.1, trail_period_s=0.25, decisions_kept=200):
+    def __init__(self, console=None, history_s=60.0, sample_period_s=0.1, trail_period_s=0.2, decisions_kept=200):
         self.console = console or ConsoleModel()
         self.history_s, self.sample_period_s, self.trail_period_s = history_s, sample_period_s, trail_period_s
         self.t = 0.0

@@ -33,6 +33,15 @@ SECURITY_HEADERS = {
 STATIC_FILES = {"station.js": "application/javascript", "station.css": "text/css", "index.html": "text/html"}
 
 
+def _request_id(text):
+    """The page's number of a request, echoed in the reply so it can match them (None if there is none)."""
+    try:
+        request_id = json.loads(text).get("id") if len(text) <= MAX_MESSAGE_BYTES else None
+    except (ValueError, AttributeError):
+        return None
+    return request_id if isinstance(request_id, (int, str)) and not isinstance(request_id, bool) else None
+
+
 class StationServer:
     def __init__(self, model, lock, actions, access, static_dir, camera=None, rate_hz=20.0, send_timeout_s=5.0,
                  max_clients=20, heartbeat_s=10.0, clock=None):
@@ -155,10 +164,9 @@ class StationServer:
         return ws
 
     def _handle(self, client, text):
-        request_id = None
+        request_id = _request_id(text)
         try:
             message = parse(text)
-            request_id = json.loads(text).get("id")
             kind = message["type"]
             if kind == "command":
                 ok, reply = self.actions.command(message["name"])
@@ -170,8 +178,7 @@ class StationServer:
                     return None  # sticks and keys stream at 10-20 Hz: no reply unless something to say
         except BadMessage as err:
             ok, reply = False, str(err)
-        return {"type": "reply", "id": request_id if isinstance(request_id, (int, str)) else None, "ok": ok,
-                "message": reply}
+        return {"type": "reply", "id": request_id, "ok": ok, "message": reply}
 
     async def _send(self, ws, sending):
         """Await one send, at most send_timeout_s: a client that does not read is closed."""
