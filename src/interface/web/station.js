@@ -98,7 +98,7 @@ function onState(state) {
   renderRows(state.rows);
   renderWarning(state.warning);
   renderLanding(state);
-  renderEmergency(state.emergency);
+  renderEmergency(state.emergency, state.t);
   if (state.sample) { appendSample(state); }
   drawMap(state);
   drawPlots(state.t);
@@ -162,8 +162,9 @@ function renderLanding(state) {
   $("landing-again").hidden = state.mode !== "landed";
 }
 
-function renderEmergency(emergency) {
+function renderEmergency(emergency, t) {
   if (!emergency) { return; }
+  if (stats.emergencyShownAt === undefined) { stats.emergencyShownAt = t; }   // sim time of the first report shown
   $("emergency-coordinates").textContent = "x = " + emergency.x.toFixed(2) + " m   y = " + emergency.y.toFixed(2) + " m";
   $("emergency-ack").textContent = emergency.acknowledged ? "acknowledged" : "reported every second until acknowledged";
 }

@@ -66,6 +66,11 @@ def _params():
         if not isinstance(private.get(name), str) or not private[name]:
             raise StartupError("%s: required parameter '~%s' (text) is missing" % (where, name))
         values[name] = private[name]
+    token = private.get("token", "")
+    if not isinstance(token, str) or (token and len(token) < 16):
+        raise StartupError("%s: parameter '~token' must be empty (a new token at every start) or a text of at least "
+                           "16 characters" % where)
+    values["token"] = token or None
     for name, yaml_name in (("keyboard", "keyboard.yaml"), ("ps4", "ps4.yaml")):
         if not isinstance(private.get(name), dict):
             raise StartupError("%s: required parameters '~%s/...' are missing (load ardrone_moves/config/%s)"
@@ -279,7 +284,7 @@ class StationNode:
     # ----- server ---------------------------------------------------------------------------------------------
     async def serve(self):
         p = self.params
-        access = Access(p["host"])
+        access = Access(p["host"], token=p["token"])
         server = StationServer(self.model, self.lock, self, access, p["static_dir"], camera=self.camera,
                                rate_hz=p["state_rate_hz"], send_timeout_s=p["send_timeout_s"],
                                max_clients=p["max_clients"], clock=rospy.get_time)
