@@ -192,7 +192,8 @@ class ConsoleNode:
     def key(self, key):
         """One key typed in the terminal: in Manual Control the teleop's, else the console's."""
         with self.lock:
-            flying = self.teleop is not None and self.model.mode == "manual" and key not in MANUAL_CONSOLE_KEYS
+            flying = self.teleop is not None and self.model.mode == "manual" and \
+                self.model.screen == Screen.FLIGHT_MANAGEMENT and key not in MANUAL_CONSOLE_KEYS
             if flying:
                 result = self.teleop.press(key, time.monotonic())
         if not flying:
