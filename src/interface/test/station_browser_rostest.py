@@ -63,10 +63,10 @@ class StationBrowserTest(unittest.TestCase):
 
     def click(self, screen, command):
         """Click a menu button; returns the browser's clock (ms) just before the click."""
-        button = self.driver.find_element(By.CSS_SELECTOR, "#screen-%s button[data-command=%s]" % (screen, command))
-        wait_for(button.is_displayed, "the %s button on the %s menu" % (command, screen))
-        return self.js("const t = Date.now(); arguments[0].click(); return t;".replace("arguments[0]", "document."
-                       "querySelector('#screen-%s button[data-command=%s]')" % (screen, command)))
+        selector = "#screen-%s button[data-command=%s]" % (screen, command)
+        wait_for(self.driver.find_element(By.CSS_SELECTOR, selector).is_displayed,
+                 "the %s button on the %s menu" % (command, screen))
+        return self.js("const t = Date.now(); document.querySelector('%s').click(); return t;" % selector)
 
     def command_latency_ms(self, clicked_ms, word):
         arrived = wait_for(lambda: next((t for t, w in self.commands if w == word and t * 1000 >= clicked_ms - 5),

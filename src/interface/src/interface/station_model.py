@@ -11,8 +11,6 @@ import math
 from .console_model import ConsoleModel
 from .station_protocol import CONDITIONS
 
-SCREENS = ("start", "flight_management", "landing", "manual", "emergency", "quit")
-
 
 # ----- message translation ------------------------------------------------------------------------------
 def yaw_of(q):
