@@ -4,13 +4,15 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
 from interface.console import render_plain  # noqa: E402
-from interface.console_model import ConsoleModel, Screen  # noqa: E402
+from interface.conditions import load_table  # noqa: E402
+from interface.console_model import ConsoleModel, Screen, panel_keys  # noqa: E402
+
+TABLE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "config", "conditions.yaml")
 
 
 def started(**kwargs):
     model = ConsoleModel(**kwargs)
-    assert model.handle("s") == (None, "Flight Management opened: the drone takes off by itself after 30 s "
-                                       "without a choice")
+    assert model.handle("s") == ("start", "Flight Management opened: without a choice the drone takes off by itself")
     return model
 
 
@@ -71,3 +73,45 @@ def test_warning_and_emergency_position_are_rendered_with_countdown():
     assert "WARNING: cold -> the flight goes on" in "\n".join(render_plain(model, 30.0))
     model.on_warning({})
     assert model.warning is None
+
+
+def test_rows_are_coloured_by_the_flag_of_the_supervisors_conditions_and_cleared_again():
+    keys = panel_keys(load_table(TABLE))
+    assert keys["wind_strong"] == keys["wind_critical"] == "wind_speed"
+    assert keys["camera_missing"] == "sensors" and keys["platform_too_fast"] == "drone_speed"
+    assert "target_lost" not in keys
+    model = started(condition_keys=keys)
+    model.set_value("wind_speed", 13.0)
+    model.on_decision({"t": 1.0, "condition": "wind_strong", "flag": 3, "action": "recheck", "reason": "strong"})
+    model.on_decision({"t": 1.0, "condition": "wind_critical", "flag": 1, "action": "emergency_landing",
+                       "reason": "critical"})
+    row = {row.key: row for row in model.rows()}["wind_speed"]
+    assert row.alarm and row.flag == 1 and row.note == "flag #1, emergency_landing: critical"  # the worst first
+    model.on_decision({"t": 2.0, "condition": "wind_critical", "flag": 1, "action": "cleared", "reason": "ok"})
+    assert {row.key: row for row in model.rows()}["wind_speed"].flag == 3
+    model.on_decision({"t": 3.0, "condition": "camera_missing", "flag": 3, "action": "recheck", "reason": "silent"})
+    sensors = {row.key: row for row in model.rows()}["sensors"]
+    assert sensors.flag == 3 and sensors.note == "flag #3, recheck: silent"
+
+
+def test_countdown_to_the_auto_take_off_and_the_landing_menu():
+    model = started()
+    model.on_flight_management({"open": True, "auto_takeoff_at": 57.0})
+    assert model.auto_takeoff_in(40.0) == 17.0
+    assert "auto take-off in 17 s without a choice" in render_plain(model, 40.0)
+    model.on_flight_management({"open": True, "auto_takeoff_at": None})
+    assert model.auto_takeoff_in(40.0) is None
+    model.mode, model.tracker_state = "landing", "LANDING"
+    model.drone_xy, model.target_xy, model.height = (1.0, 2.0), (1.3, 2.4), 0.8
+    assert model.landing_lines() == ["tracker LANDING   error 0.50 m   height 0.80 m"]
+    model.on_decision({"t": 22.1, "condition": "flight", "action": "landed", "flag": None,
+                       "reason": "Landing performed successfully: on the pad, 0.08 m from its centre"})
+    model.mode, model.tracker_state = "landed", "LANDED"
+    lines = render_plain(model, 23.0)
+    assert "Landing performed successfully: on the pad, 0.08 m from its centre" in lines
+
+
+def test_flight_management_opened_by_another_ui_leaves_the_start_menu():
+    model = ConsoleModel()
+    model.on_flight_management({"open": True, "auto_takeoff_at": 30.0})
+    assert model.screen == Screen.FLIGHT_MANAGEMENT

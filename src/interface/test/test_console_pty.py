@@ -137,3 +137,44 @@ def test_commands_as_arguments_without_a_terminal(ros_env, operator_commands):
     wait_for(lambda: "emergency" in operator_commands.read() and "quit" in operator_commands.text,
              "emergency and quit on operator/command")
     assert "dance" not in operator_commands.text
+
+
+@pytest.mark.needs_pty
+def test_manual_control_keys_fly_the_drone_as_the_teleop(ros_env):
+    """start.launch's Manual Control by keyboard: with the teleop's parameters (~keyboard) and the supervisor in
+    manual mode, the console's keys become ardrone/cmd_vel (remapped to manual/cmd_vel there)."""
+    import yaml
+    with open(os.path.join(PACKAGE, "..", "ardrone_moves", "config", "keyboard.yaml")) as stream:
+        keyboard = yaml.safe_load(stream)
+    subprocess.run(["rosparam", "set", "/operator_console/keyboard", yaml.safe_dump(keyboard, default_flow_style=True)],
+                   env=ros_env, check=True, timeout=TIMEOUT)
+    # a stand-in for the supervisor (latched mode: manual) and a listener of the velocity commands
+    script = ("import rospy; from std_msgs.msg import String; from geometry_msgs.msg import Twist; "
+              "rospy.init_node('manual_stand_in', anonymous=True); "
+              "mode = rospy.Publisher('/supervisor/mode', String, queue_size=1, latch=True); "
+              "mode.publish(String(data='manual')); "
+              "rospy.Subscriber('/ardrone/cmd_vel', Twist, lambda m: print('cmd %.2f %.2f' % (m.linear.x, m.linear.y), "
+              "flush=True)); rospy.spin()")
+    stand_in = subprocess.Popen([sys.executable, "-c", script], env=ros_env, stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, start_new_session=True)
+    heard = Lines(stand_in.stdout.fileno())
+    master, slave = pty.openpty()
+    env = dict(ros_env, TERM="xterm-256color", COLUMNS="120", LINES="40")
+    console = subprocess.Popen([sys.executable, CONSOLE], env=env, stdin=slave, stdout=slave, stderr=slave,
+                               start_new_session=True)
+    os.close(slave)
+    screen = Lines(master)
+    try:
+        wait_for(lambda: "Start" in screen.read() and "Quit" in screen.text, "the Start menu on the terminal")
+        wait_for(lambda: (os.write(master, b"s"), "Manual Control" in screen.read() and "teleop keys fly" in screen.text)[1],
+                 "the Manual Control menu with the teleop keys after s (Start)")
+        # hold i (forward) as a terminal's key repeat would, until the listener hears it
+        wait_for(lambda: (os.write(master, b"i"), screen.read(), "cmd 0.50 0.00" in heard.read())[2],
+                 "ardrone/cmd_vel forward 0.5 m/s after the key i")
+        wait_for(lambda: (screen.read(), "cmd 0.00 0.00" in heard.read())[1], "the stop once the key is released")
+        os.write(master, b"Q")
+        wait_for(lambda: (screen.read(), console.poll() is not None)[1], "the console to close on Q")
+    finally:
+        stop(console)
+        stop(stand_in)
+        os.close(master)

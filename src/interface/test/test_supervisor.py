@@ -10,6 +10,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "src"))
 from interface.conditions import MISSING, PENDING, load_table  # noqa: E402
 from interface.supervisor import Flight, Mode, Settings, SettingsError, Supervisor  # noqa: E402
+from interface.supervisor_measures import TouchdownJudge  # noqa: E402
 
 TABLE_PATH = os.path.join(HERE, "..", "config", "conditions.yaml")
 # Thesis Flight Management defaults (Appendix 3) plus healthy measurements: nothing adverse.
@@ -323,6 +324,35 @@ def test_auto_take_off_after_30_s_without_a_choice(h):
     assert [d for d in h.decisions if d["condition"] == "idle"][0]["action"] == "takeoff"
 
 
+def test_with_wait_for_start_the_30_s_run_from_the_operators_start():
+    h = Harness(Settings(answer_timeout_s=15.0, idle_takeoff_s=30.0, recheck_interval_s=2.0, recheck_count=3,
+                         wait_for_start=True))
+    h.tick()
+    assert h.sup.flight_management() == {"open": False, "auto_takeoff_at": None}
+    h.run(27.0)   # the case: Start pressed at t = 27 s
+    accepted, message = h.command("start")
+    assert accepted and "takes off by itself at t=57.0 s" in message
+    assert h.sup.flight_management() == {"open": True, "auto_takeoff_at": 57.0}
+    h.run(29.8)
+    assert h.sup.mode is Mode.IDLE and h.tracker == []
+    h.run(0.3)
+    assert h.sup.mode is Mode.LANDING and h.tracker == ["takeoff"]
+    assert h.sup.flight_management() == {"open": True, "auto_takeoff_at": None}
+    assert not h.command("start")[0]  # once only
+
+
+def test_start_then_a_choice_cancels_the_countdown():
+    h = Harness(Settings(answer_timeout_s=15.0, idle_takeoff_s=30.0, recheck_interval_s=2.0, recheck_count=3,
+                         wait_for_start=True))
+    h.tick()
+    h.command("start")
+    h.run(3.0)
+    h.command("manual")
+    assert h.sup.flight_management()["auto_takeoff_at"] is None
+    h.run(40.0)
+    assert h.sup.mode is Mode.MANUAL and "takeoff" not in h.tracker
+
+
 def test_a_choice_cancels_the_auto_take_off(h):
     h.tick()
     h.run(5.0)
@@ -378,7 +408,7 @@ def test_unreadable_value_of_a_present_condition_is_still_reported(flying):
 # ----- operator, flight state -------------------------------------------------------------------------------
 def test_unknown_command_is_ignored_with_a_clear_message(h):
     accepted, message = h.command("fly away")
-    assert not accepted and "expected one of landing, takeoff" in message
+    assert not accepted and "expected one of start, landing, takeoff" in message
     assert h.decisions[-1]["action"] == "ignored"
 
 
@@ -386,6 +416,40 @@ def test_landing_mission_ends_landed_after_touchdown(flying):
     flying.flight = Flight.LANDED
     flying.tick()
     assert flying.sup.mode is Mode.LANDED and "landed" in actions(flying.decisions)
+
+
+def judged(state_before, detection, t=22.1):
+    judge = TouchdownJudge(max_age_s=1.0, max_offset_m=0.5)
+    for state in ("LANDED", "TAKING_OFF", "TRACKING", state_before, "LANDED"):
+        judge.on_tracker_state(state)
+    if detection is not None:
+        judge.on_detection(*detection)
+    return judge(t)
+
+
+def test_touchdown_on_the_pad_is_told_from_the_tracker_state_and_the_last_detection():
+    assert judged("LANDING", (21.7, 0.06, -0.05)) == (
+        True, "on the pad, 0.08 m from its centre when last seen 0.4 s before the touchdown")
+    assert judged("LANDING", (20.0, 0.06, -0.05)) == (False, "the pad was last seen 2.1 s before the touchdown")
+    assert judged("LANDING", (21.7, 0.6, 0.1)) == (False, "the pad centre was 0.61 m away when last seen")
+    assert judged("LANDING", None) == (False, "the camera never saw the pad")
+    assert judged("FORCE_LANDING", (21.7, 0.0, 0.0))[0] is False
+
+
+def test_landing_performed_successfully_only_on_the_pad(flying):
+    verdict = [(True, "on the pad, 0.05 m from its centre")]
+    flying.sup.touchdown_judge = lambda t: verdict[0]
+    flying.flight = Flight.LANDED
+    flying.tick()
+    landed = [d for d in flying.decisions if d["action"] == "landed"][0]
+    assert landed["reason"] == "Landing performed successfully: on the pad, 0.05 m from its centre"
+    assert landed["value"] == {"on_pad": True}
+    second = Harness().airborne_mission()
+    second.sup.touchdown_judge = lambda t: (False, "the pad was last seen 3.0 s before the touchdown")
+    second.flight = Flight.LANDED
+    second.tick()
+    landed = [d for d in second.decisions if d["action"] == "landed"][0]
+    assert "successfully" not in landed["reason"] and "not on the pad: the pad was last seen" in landed["reason"]
 
 
 def test_emergency_report_acknowledged_on_the_ground_ends_landed(flying):
@@ -413,8 +477,11 @@ def test_manual_and_back_to_the_landing_mission(flying):
 
 # ----- settings --------------------------------------------------------------------------------------------
 def test_settings_name_a_missing_or_bad_key():
-    good = {"answer_timeout_s": 15.0, "idle_takeoff_s": 30.0, "recheck_interval_s": 2.0, "recheck_count": 3}
+    good = {"answer_timeout_s": 15.0, "idle_takeoff_s": 30.0, "recheck_interval_s": 2.0, "recheck_count": 3,
+            "wait_for_start": True}
     assert Settings.from_mapping(good).recheck_count == 3
+    with pytest.raises(SettingsError, match="'wait_for_start' must be true or false"):
+        Settings.from_mapping(dict(good, wait_for_start="yes"))
     with pytest.raises(SettingsError, match="'idle_takeoff_s' is missing"):
         Settings.from_mapping({k: v for k, v in good.items() if k != "idle_takeoff_s"})
     with pytest.raises(SettingsError, match="'recheck_count' must be an integer"):

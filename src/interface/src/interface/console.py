@@ -1,5 +1,7 @@
 """Operator console (replaces the thesis' Tk menus): a live Flight Management panel in the terminal,
-commands by key, by stdin line or by argument; every action goes out on operator/command."""
+commands by key, by stdin line or by argument; every action goes out on operator/command. In Manual
+Control the keys fly the drone as ardrone_moves' keyboard teleop does (the terminal is the console's,
+so the teleop runs inside it), publishing ardrone/cmd_vel (remapped to manual/cmd_vel in start.launch)."""
 import argparse
 import json
 import math
@@ -11,7 +13,7 @@ import threading
 import time
 import tty
 
-from .console_model import PANEL, ConsoleModel, Screen
+from .console_model import MANUAL_CONSOLE_KEYS, PANEL, ConsoleModel, Screen, panel_keys
 
 SENSOR_TOPICS = {"camera": "ardrone/bottom/camera_info", "imu": "ardrone/imu", "odometry": "ardrone/gps/odom",
                  "sonar": "ardrone/sonar_height"}
@@ -32,6 +34,10 @@ def render_plain(model, sim_time):
     lines = ["== %s ==  t=%.1f s  mode=%s  tracker=%s" % (model.title(), sim_time, model.mode, model.tracker_state)]
     for row in model.rows():
         lines.append("%s %-26s %-28s %s" % ("!" if row.alarm else " ", row.label, row.text, row.note))
+    countdown = model.auto_takeoff_in(sim_time)
+    if countdown is not None:
+        lines.append("auto take-off in %.0f s without a choice" % countdown)
+    lines += model.landing_lines()
     if model.warning:
         lines.append("WARNING: %s -> %s" % (model.warning.get("message", ""), _answer_text(model.warning, sim_time)))
     if model.emergency_position is not None:
@@ -53,6 +59,14 @@ def render_rich(model, sim_time):
         style = "bold white on red" if row.alarm else ""
         table.add_row(row.label, Text(row.text, style=style), Text(row.note, style="yellow"))
     parts = [table]
+    countdown = model.auto_takeoff_in(sim_time)
+    if countdown is not None:
+        parts.append(Text("auto take-off in %.0f s without a choice" % countdown, style="bold cyan"))
+    landing = model.landing_lines()
+    if landing:
+        parts.append(Text(landing[0]))
+        if len(landing) > 1:
+            parts.append(Text(landing[1], style="bold green" if "successfully" in landing[1] else "bold yellow"))
     if model.warning:
         parts.append(Panel(Text("%s\n%s" % (model.warning.get("message", ""), _answer_text(model.warning, sim_time)),
                                 style="bold yellow"), title="WARNING"))
@@ -66,12 +80,15 @@ def render_rich(model, sim_time):
 
 
 class ConsoleNode:
-    def __init__(self, model, plain):
+    def __init__(self, model, plain, teleop=None):
         import rospy
+        from geometry_msgs.msg import PointStamped
         from landing_msgs.msg import Navdata, PositionXYCommand
         from nav_msgs.msg import Odometry
+        from sensor_msgs.msg import Range
         from std_msgs.msg import String
         self.rospy, self.model, self.plain = rospy, model, plain
+        self.teleop = teleop  # ardrone_moves KeyboardTeleop for Manual Control, or None
         self.lock = threading.Lock()
         self.last_seen = {}
         # synchronous (no queue): a command is on the wire when publish returns, even if we quit next
@@ -86,6 +103,13 @@ class ConsoleNode:
         for name, topic in SENSOR_TOPICS.items():
             rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
         rospy.Subscriber("ardrone/odom_estimate", Odometry, self._on_odometry, queue_size=1)
+        rospy.Subscriber("supervisor/flight_management", String, self._on_flight_management)
+        rospy.Subscriber("platform_tracking/target", PointStamped,
+                         lambda m: self._set(target_xy=(m.point.x, m.point.y)), queue_size=1)
+        rospy.Subscriber("ardrone/sonar_height", Range, lambda m: self._set(height=m.range), queue_size=1)
+        if teleop is not None:
+            from .manual_outputs import ManualOutputs
+            self.drone_commands = ManualOutputs(self.publisher)
 
     def _set(self, **values):
         with self.lock:
@@ -113,14 +137,23 @@ class ConsoleNode:
         with self.lock:
             self.model.on_warning(warning)
 
+    def _on_flight_management(self, msg):
+        try:
+            state = json.loads(msg.data)
+        except ValueError:
+            return
+        with self.lock:
+            self.model.on_flight_management(state)
+
     def _on_navdata(self, msg):
         with self.lock:
             self.model.flight_speed = math.hypot(msg.vx, msg.vy)
 
     def _on_odometry(self, msg):
-        v = msg.twist.twist.linear
+        v, p = msg.twist.twist.linear, msg.pose.pose.position
         with self.lock:
             self.model.flight_speed = math.hypot(v.x, v.y)
+            self.model.drone_xy = (p.x, p.y)
 
     def refresh(self):
         """Read the condition parameters (cached, pushed by the master) and the sensor ages."""
@@ -155,6 +188,32 @@ class ConsoleNode:
             if self.publisher.get_num_connections() >= expected:
                 return
             time.sleep(0.05)
+
+    def key(self, key):
+        """One key typed in the terminal: in Manual Control the teleop's, else the console's."""
+        with self.lock:
+            flying = self.teleop is not None and self.model.mode == "manual" and \
+                self.model.screen == Screen.FLIGHT_MANAGEMENT and key not in MANUAL_CONSOLE_KEYS
+            if flying:
+                result = self.teleop.press(key, time.monotonic())
+        if not flying:
+            return self.command(key)
+        self.drone_commands.act(result.actions)
+        if result.message:
+            with self.lock:
+                self.model.note(result.message.strip().splitlines()[0] if key not in ("h", "?") else
+                                " ".join(result.message.split()))
+        return None
+
+    def fly(self, stop, rate_hz):
+        """Publish the teleop's command at ``rate_hz`` (wall clock: it is about a human's keys)."""
+        period = 1.0 / rate_hz
+        while not stop.is_set() and not self.rospy.is_shutdown():
+            with self.lock:
+                command = self.teleop.tick(time.monotonic())
+            if command is not None:
+                self.drone_commands.send(command)
+            stop.wait(period)
 
     def command(self, text):
         from std_msgs.msg import String
@@ -194,6 +253,35 @@ def _read_lines(on_line, stop):
             break
 
 
+def _condition_keys():
+    """The supervisor's condition names -> panel rows, from ~conditions_file (config/conditions.yaml)."""
+    import rospy
+    from .conditions import ConditionTableError, load_table
+    path = rospy.get_param("~conditions_file", "")
+    if not path:
+        return {}
+    try:
+        return panel_keys(load_table(path))
+    except ConditionTableError as err:
+        rospy.logwarn("operator console: %s: the panel names the supervisor's conditions as they come" % err)
+        return {}
+
+
+def _keyboard_teleop():
+    """ardrone_moves' keyboard teleop from ~keyboard (config/keyboard.yaml), or (None, None) without it."""
+    import rospy
+    params = rospy.get_param("~keyboard", None)
+    if not params:
+        return None, None
+    from ardrone_moves.keyboard import KeyboardConfig, KeyboardTeleop
+    from ardrone_moves.mapping import ConfigError, required
+    try:
+        return KeyboardTeleop(KeyboardConfig.from_dict(params)), required(params, "rate_hz", float)
+    except ConfigError as err:
+        rospy.logfatal("operator console: ~keyboard: %s (see ardrone_moves/config/keyboard.yaml)" % err)
+        raise SystemExit(2)
+
+
 def main(argv=None):
     import rospy
     parser = argparse.ArgumentParser(description="Operator console of the landing system.")
@@ -204,9 +292,12 @@ def main(argv=None):
     args = parser.parse_args(rospy.myargv(argv if argv is not None else sys.argv)[1:])
     rospy.init_node("operator_console", disable_signals=True)
     interactive = sys.stdin.isatty() and not args.plain
-    model = ConsoleModel(ranges=rospy.get_param("~ranges", {}))
-    node = ConsoleNode(model, plain=not interactive)
+    model = ConsoleModel(ranges=rospy.get_param("~ranges", {}), condition_keys=_condition_keys())
+    teleop, teleop_rate = _keyboard_teleop() if interactive else (None, None)
+    node = ConsoleNode(model, plain=not interactive, teleop=teleop)
     stop = threading.Event()
+    if teleop is not None:
+        threading.Thread(target=node.fly, args=(stop, teleop_rate), daemon=True).start()
 
     def run_script():
         if args.commands:
@@ -220,7 +311,7 @@ def main(argv=None):
                 node.command(item)
     threading.Thread(target=run_script, daemon=True).start()
     reader = threading.Thread(target=_read_keys if interactive else _read_lines,
-                              args=(node.command, stop), daemon=True)
+                              args=(node.key if interactive else node.command, stop), daemon=True)
     if interactive or not os.environ.get("CONSOLE_NO_STDIN"):
         reader.start()
     try:

@@ -8,7 +8,11 @@ It turns condition readings and operator commands into modes and decisions:
 - go/no-go of the landing on the pad, with its reasons; a no-go during the landing mission is a
   warning the operator must answer (manual / emergency / continue) within ``answer_timeout_s``,
   else the drone lands on the ground (thesis 2.1);
-- the Flight Management idle for ``idle_takeoff_s`` (30 s) without a choice: take off by itself;
+- the Flight Management idle for ``idle_takeoff_s`` (30 s) without a choice: take off by itself. With
+  ``wait_for_start`` the time counts from the operator's ``start`` (the UI opened Flight Management,
+  thesis 3.2.1-3.3.1), else from the first tick (no UI: scenarios, tests);
+- the end of the landing mission: on the pad ("Landing performed successfully", thesis figure 3.4) or
+  not, judged by ``touchdown_judge`` from the drone's own evidence;
 - an unreadable condition value counts as the adverse condition (unknown is unsafe).
 
 Every decision is a record ``{t, condition, flag, action, reason, value}``; every mode change goes
@@ -36,7 +40,7 @@ class Flight(enum.Enum):
     AIRBORNE = "airborne"    # taking off, flying, hovering or landing
 
 
-OPERATOR_COMMANDS = ("landing", "takeoff", "manual", "emergency", "continue", "ack", "quit")
+OPERATOR_COMMANDS = ("start", "landing", "takeoff", "manual", "emergency", "continue", "ack", "quit")
 WARNING_OPTIONS = ["manual", "emergency", "continue"]
 REASON_TEXT = {"weather": "weather", "battery": "battery", "controller_battery": "controller battery",
                "drone_speed": "drone speed", "platform_too_fast": "platform too fast for the drone",
@@ -59,9 +63,11 @@ class Settings:
         "recheck_count": (int, 1, 100),
     }
 
-    def __init__(self, answer_timeout_s=15.0, idle_takeoff_s=30.0, recheck_interval_s=2.0, recheck_count=3):
+    def __init__(self, answer_timeout_s=15.0, idle_takeoff_s=30.0, recheck_interval_s=2.0, recheck_count=3,
+                 wait_for_start=False):
         self.answer_timeout_s, self.idle_takeoff_s = answer_timeout_s, idle_takeoff_s
         self.recheck_interval_s, self.recheck_count = recheck_interval_s, recheck_count
+        self.wait_for_start = wait_for_start  # the idle take-off timer runs from the operator's "start"
 
     @classmethod
     def from_mapping(cls, values, where="supervisor parameters"):
@@ -78,6 +84,12 @@ class Settings:
             if not low <= value <= high:
                 raise SettingsError("%s: parameter '%s' = %g is outside %g..%g" % (where, name, value, low, high))
             checked[name] = kind(value)
+        if "wait_for_start" not in values:
+            raise SettingsError("%s: required parameter 'wait_for_start' is missing" % where)
+        if not isinstance(values["wait_for_start"], bool):
+            raise SettingsError("%s: parameter 'wait_for_start' must be true or false, got %r"
+                                % (where, values["wait_for_start"]))
+        checked["wait_for_start"] = values["wait_for_start"]
         return cls(**checked)
 
 
@@ -118,9 +130,11 @@ def _default_log(level, text):
 
 
 class Supervisor:
-    def __init__(self, table, settings, log=None):
+    def __init__(self, table, settings, log=None, touchdown_judge=None):
+        """``touchdown_judge(t)`` -> (on the pad: bool, why: str), asked when the landing mission ends."""
         self.table, self.settings = table, settings
         self.log = log or _default_log
+        self.touchdown_judge = touchdown_judge
         self.mode = Mode.IDLE
         self.flight = Flight.UNKNOWN
         self.states = {row.name: RowState() for row in table}
@@ -128,7 +142,9 @@ class Supervisor:
         self.warning = {}
         self.emergency_acknowledged = False
         self._airborne_in_mode = False
-        self._idle_since = None
+        self._idle_since = None          # the idle take-off timer runs from here (sim s)
+        self._flight_management_open = not settings.wait_for_start
+        self._started = False            # the operator's "start" came (the idle timer runs from it)
         self._operator_chose = False
         self._auto_takeoff_announced = False
         self._reported_nogo = None       # row names of the last go/no-go decision of the landing
@@ -186,7 +202,7 @@ class Supervisor:
     def tick(self, t, readings, flight=Flight.UNKNOWN):
         """Evaluate every condition at sim time ``t``. ``readings``: source name -> raw value (the
         parameter as read, or a measurement; MISSING when absent); ``flight``: Flight."""
-        if self._idle_since is None:
+        if self._idle_since is None and self._flight_management_open:
             self._idle_since = t
         self._follow_flight(t, flight)
         for row in self.table:
@@ -350,8 +366,15 @@ class Supervisor:
                         "default": "emergency" if deadline is not None else "continue", "conditions": list(names)}
 
     # ----- take-off -----------------------------------------------------------------------------------
+    def flight_management(self):
+        """What the operator's Flight Management shows: open yet, and when the drone takes off by itself
+        (sim s; None when no auto take-off is pending)."""
+        pending = self.mode is Mode.IDLE and not self._operator_chose and self._idle_since is not None
+        return {"open": self._flight_management_open,
+                "auto_takeoff_at": round(self._idle_since + self.settings.idle_takeoff_s, 3) if pending else None}
+
     def _auto_takeoff(self, t):
-        if self.mode is not Mode.IDLE or self._operator_chose:
+        if self.mode is not Mode.IDLE or self._operator_chose or self._idle_since is None:
             return
         if t - self._idle_since < self.settings.idle_takeoff_s:
             return
@@ -384,7 +407,13 @@ class Supervisor:
         if flight is not Flight.LANDED:
             return
         if self.mode is Mode.LANDING and self._airborne_in_mode:
-            self._decide(t, "flight", None, "landed", "touchdown: the landing mission is over")
+            on_pad, why = self.touchdown_judge(t) if self.touchdown_judge else (None, "no evidence of the surface")
+            if on_pad:
+                reason = "Landing performed successfully: " + why
+            else:
+                reason = "touchdown: the landing mission is over, %s" % (
+                    "not on the pad: " + why if on_pad is False else why)
+            self._decide(t, "flight", None, "landed", reason, {"on_pad": on_pad})
             self._transition(t, Mode.LANDED, "touchdown after the landing mission")
         elif self.mode is Mode.EMERGENCY and self.emergency_acknowledged:
             self._transition(t, Mode.LANDED, "emergency landing done and acknowledged")
@@ -410,12 +439,24 @@ class Supervisor:
             # not everything evaluated yet: a "go" now would ignore a condition that is already there
             self._waiting_commands.append(word)
             return True, "%r waits for the first reading of the conditions" % word
-        if self.mode is Mode.IDLE and word != "ack":
+        if self.mode is Mode.IDLE and word not in ("ack", "start"):
             self._operator_chose = True
         accepted, message = getattr(self, "_on_" + word)(t)
         self._update_landing_allowed(t)
         self._update_warning()
         return accepted, message
+
+    def _on_start(self, t):
+        if self._started:
+            return self._ignored(t, "start", "Flight Management is already open")
+        self._started = self._flight_management_open = True
+        if self.mode is Mode.IDLE and not self._operator_chose:
+            self._idle_since = t
+            why = "the drone takes off by itself at t=%.1f s without a choice" % (t + self.settings.idle_takeoff_s)
+        else:
+            why = "the flight is already under way (mode %s)" % self.mode.value
+        self._decide(t, "operator", None, "start", "operator opened the Flight Management: " + why, "start")
+        return True, "Flight Management opened: " + why
 
     def _ignored(self, t, word, why):
         message = "ignored %r in mode %s: %s" % (word, self.mode.value, why)

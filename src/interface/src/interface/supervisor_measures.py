@@ -110,3 +110,36 @@ class TargetLostTimer:
 
     def value(self, t):
         return 0.0 if self.lost_since is None else max(0.0, t - self.lost_since)
+
+
+class TouchdownJudge:
+    """Did the landing mission end on the pad? From the drone's own evidence, never ground truth: the
+    tracker was in its own landing (not forced down, not searching) when it touched down, and the camera
+    saw the pad centre within ``max_offset_m`` of the drone shortly before (``max_age_s``; the pad leaves
+    the view in the last few decimetres). Called as ``judge(t)`` -> (on the pad, why)."""
+
+    def __init__(self, max_age_s, max_offset_m, landing_state="LANDING", landed_state="LANDED"):
+        self.max_age_s, self.max_offset_m = max_age_s, max_offset_m
+        self.landing_state, self.landed_state = landing_state, landed_state
+        self.detection = None          # (t, x, y): pad centre relative to the drone, body frame [m]
+        self.state_before = None       # the tracker's last state before LANDED
+
+    def on_detection(self, t, x, y):
+        self.detection = (t, x, y)
+
+    def on_tracker_state(self, state):
+        if state != self.landed_state:
+            self.state_before = state
+
+    def __call__(self, t):
+        if self.state_before != self.landing_state:
+            return False, "the tracker was in %s, not in its own landing on the pad" % (self.state_before or "no state")
+        if self.detection is None:
+            return False, "the camera never saw the pad"
+        seen, x, y = self.detection
+        offset, age = math.hypot(x, y), t - seen
+        if age > self.max_age_s:
+            return False, "the pad was last seen %.1f s before the touchdown" % age
+        if offset > self.max_offset_m:
+            return False, "the pad centre was %.2f m away when last seen" % offset
+        return True, "on the pad, %.2f m from its centre when last seen %.1f s before the touchdown" % (offset, age)

@@ -3,10 +3,12 @@
 In:  the condition parameters (/wind_speed, /drone_battery, ... via rospy.get_param_cached, pushed by the
      master), sensor watchdogs (ardrone/bottom/camera_info, ardrone/imu, ardrone/gps/odom,
      ardrone/sonar_height), platform speed (kalman_platform_odom, else summit_xl/gps/odom), the
-     tracker's state (platform_tracking/state), the drone's state (ardrone/navdata), operator/command
+     tracker's state (platform_tracking/state), the drone's state (ardrone/navdata), the pad seen by the
+     camera (platform/current_platform_position_in_ardrone, to tell a touchdown on the pad), operator/command
      and the Trigger services supervisor/{landing,emergency,manual,continue}.
-Out: supervisor/decisions (JSON per decision), supervisor/mode, supervisor/warning, landing_allowed
-     (latched) and platform_tracking/command (the hand-over to the tracker).
+Out: supervisor/decisions (JSON per decision), supervisor/mode, supervisor/warning, landing_allowed,
+     supervisor/flight_management (JSON {open, auto_takeoff_at}; all latched) and platform_tracking/command
+     (the hand-over to the tracker).
 Everything runs in sim time.
 """
 import json
@@ -17,13 +19,14 @@ import rospy
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Navdata
 from landing_msgs.rospy_node import init_node
+from geometry_msgs.msg import PointStamped
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger, TriggerResponse
 
 from .conditions import MISSING, ConditionTableError, load_table
 from .supervisor import Flight, Settings, SettingsError, Supervisor
-from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, flight_from_navdata
+from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, TouchdownJudge, flight_from_navdata
 
 # The camera's liveness is read from camera_info, which the driver publishes with every frame: the same
 # arrivals without copying 230 kB images into this process.
@@ -36,6 +39,8 @@ NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC a
     "platform_speed_window_s": (0.1, 60.0),
     "navdata_timeout_s": (0.05, 60.0),
     "warning_repeat_s": (0.5, 3600.0),
+    "touchdown_detection_age_s": (0.05, 60.0),
+    "touchdown_max_offset_m": (0.01, 10.0),
 }
 
 
@@ -82,12 +87,13 @@ class SupervisorNode:
         except ConditionTableError as err:
             raise StartupError("supervisor: %s" % err)
         self.lock = threading.Lock()
-        self.core = Supervisor(self.table, settings, log=self._log)
+        self.touchdown = TouchdownJudge(self.params["touchdown_detection_age_s"], self.params["touchdown_max_offset_m"])
+        self.core = Supervisor(self.table, settings, log=self._log, touchdown_judge=self.touchdown)
         self.watchdog = SensorWatchdog(SENSOR_TOPICS)
         self.platform = PlatformSpeed(self.params["platform_odom_timeout_s"], self.params["platform_speed_window_s"])
         self.target = TargetLostTimer(lost_state)
         self.navdata = None  # (receipt time, state)
-        self.published = {"mode": None, "warning": None, "landing_allowed": None}
+        self.published = {"mode": None, "warning": None, "landing_allowed": None, "flight_management": None}
         self.last_warning_sent = -1e9
         self.lockstep = LockstepAcker(period=1.0 / self.params["rate_hz"])
 
@@ -96,6 +102,7 @@ class SupervisorNode:
         self.pub_warning = rospy.Publisher("supervisor/warning", String, queue_size=1, latch=True)
         self.pub_allowed = rospy.Publisher("landing_allowed", Bool, queue_size=1, latch=True)
         self.pub_tracker = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
+        self.pub_flight_management = rospy.Publisher("supervisor/flight_management", String, queue_size=1, latch=True)
 
         # AnyMsg: only the arrival matters, nothing is deserialised.
         self.sensor_subscribers = {name: rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
@@ -104,6 +111,7 @@ class SupervisorNode:
         rospy.Subscriber("summit_xl/gps/odom", Odometry, self._on_vehicle_gps, queue_size=5)
         rospy.Subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
         rospy.Subscriber("ardrone/navdata", Navdata, self._on_navdata, queue_size=1)
+        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, self._on_detection, queue_size=5)
         rospy.Subscriber("operator/command", String, self._on_operator, queue_size=10)
         self.services = [rospy.Service("supervisor/" + name, Trigger, self._service(name)) for name in SERVICES]
         for name, value in self.params["initial_conditions"].items():
@@ -143,6 +151,11 @@ class SupervisorNode:
     def _on_tracker_state(self, msg):
         with self.lock:
             self.target.on_state(rospy.get_time(), msg.data)
+            self.touchdown.on_tracker_state(msg.data)
+
+    def _on_detection(self, msg):
+        with self.lock:
+            self.touchdown.on_detection(msg.header.stamp.to_sec(), msg.point.x, msg.point.y)
 
     def _on_navdata(self, msg):
         self.navdata = (rospy.get_time(), msg.state)
@@ -205,6 +218,10 @@ class SupervisorNode:
             # A pending warning is sent again every warning_repeat_s (thesis: keep sending the message).
             self.pub_warning.publish(String(data=warning))
             self.published["warning"], self.last_warning_sent = warning, now
+        flight_management = json.dumps(self.core.flight_management(), sort_keys=True)
+        if flight_management != self.published["flight_management"]:
+            self.pub_flight_management.publish(String(data=flight_management))
+            self.published["flight_management"] = flight_management
         if self.core.landing_allowed != self.published["landing_allowed"]:
             self.pub_allowed.publish(Bool(data=self.core.landing_allowed))
             self.published["landing_allowed"] = self.core.landing_allowed
