@@ -169,6 +169,15 @@ bool PadMotionFilter::isTracking(double now) const
 
 MeasurementOutcome PadMotionFilter::addVision(double stamp, const Eigen::Vector3d& position, double variance)
 {
+  if (initialised_ && std::isfinite(stamp) && !(stamp - last_vision_accepted_time_ < params_.gps_vision_timeout))
+  {
+    // The camera is back on a track that GPS held: the offset taken off the GPS fixes is one error shared by
+    // all of them, not noise that averaged out, so the track is no surer of where the pad is than of the
+    // offset (else the camera's first fixes would be outliers until ten in a row restarted the track).
+    for (int j = 0; j < kModes; ++j)
+      for (const int i : { Model::kPx, Model::kPy })
+        P_[j](i, i) += gps_offset_variance_;
+  }
   Eigen::Matrix<double, 3, Model::kSize> H = Eigen::Matrix<double, 3, Model::kSize>::Zero();
   H(0, Model::kPx) = H(1, Model::kPy) = H(2, Model::kPz) = 1.0;
   const bool given = std::isfinite(variance) && variance > 0.0;
@@ -191,19 +200,8 @@ MeasurementOutcome PadMotionFilter::addGps(double stamp, const Eigen::Vector2d& 
     start_velocity = StartVelocity{ *velocity, velocity_variance };
   if (std::isfinite(stamp) && position_xy.allFinite())
     learnGpsOffset(stamp, position_xy);
-  const MeasurementOutcome outcome = addFix<2>(Source::kGps, stamp, position_xy - gps_offset_, H,
-                                               params_.gps_observation_covariance + gps_offset_variance_,
-                                               start_velocity);
-  if (outcome == MeasurementOutcome::kAccepted || outcome == MeasurementOutcome::kInitialised ||
-      outcome == MeasurementOutcome::kReinitialised)
-  {
-    // The offset is one error shared by every fix, not noise that averages out: a track that GPS holds is
-    // no surer of where the pad is than of the offset (else the camera's first fixes would be outliers).
-    for (int j = 0; j < kModes; ++j)
-      for (const int i : { Model::kPx, Model::kPy })
-        P_[j](i, i) = std::max(P_[j](i, i), gps_offset_variance_);
-  }
-  return outcome;
+  return addFix<2>(Source::kGps, stamp, position_xy - gps_offset_, H,
+                   params_.gps_observation_covariance + gps_offset_variance_, start_velocity);
 }
 
 void PadMotionFilter::learnGpsOffset(double stamp, const Eigen::Vector2d& position_xy)
