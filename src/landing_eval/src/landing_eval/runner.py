@@ -6,6 +6,7 @@ import argparse
 import collections
 import json
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -338,6 +339,14 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     return result
 
 
+def stop_on_sigterm():
+    """SIGTERM (the benchmark's stop, or a dying Ray worker's death signal) unwinds like Ctrl-C, so the
+    launch and the recorder, each in a session of its own, are stopped instead of left running."""
+    def handler(signum, _frame):
+        raise KeyboardInterrupt("signal %s" % signal.Signals(signum).name)
+    signal.signal(signal.SIGTERM, handler)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description="Run one landing scenario headless; write result.json and flight.bag.")
     parser.add_argument("scenario", help="scenario YAML file (SPEC section 7)")
@@ -346,6 +355,7 @@ def main(argv=None):
     parser.add_argument("--no-landing-stack", action="store_true", help="simulator and vehicle only")
     parser.add_argument("--no-supervisor", action="store_true", help="landing stack without the supervisor")
     args = parser.parse_args(argv)
+    stop_on_sigterm()
     try:
         result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack,
                      supervisor=not args.no_supervisor)
