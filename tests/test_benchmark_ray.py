@@ -8,7 +8,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 import yaml
@@ -16,20 +15,10 @@ import yaml
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "src", "landing_eval", "src"))
 from landing_eval.ray_local import RayNode  # noqa: E402
+from landing_msgs.testing import wait_for  # noqa: E402
 
 SWEEP_TIMEOUT_S = 600  # one sweep of the three scenarios; about 30-60 s on a loaded 2-core machine
 WAIT_S = 300           # for a condition inside a sweep (a row, a flight under way, processes gone)
-
-
-def wait_for(condition, what, timeout=WAIT_S, poll=0.2):
-    deadline = time.monotonic() + timeout
-    while True:
-        value = condition()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
-        time.sleep(poll)
 
 
 def scenario(shipped, **changes):
@@ -114,7 +103,8 @@ def local_sweep(suite, tmp_path_factory):
     out = tmp_path_factory.mktemp("local")
     first = benchmark([suite, "--out", out, "--jobs", "2"])
     try:
-        wait_for(lambda: rows(out) or first.poll() is not None, "the first result of the local sweep")
+        wait_for(lambda: rows(out) or first.poll() is not None, "the first result of the local sweep", WAIT_S,
+                 poll=0.2)
     finally:
         if first.poll() is None:
             os.killpg(first.pid, signal.SIGINT)
@@ -152,13 +142,14 @@ def test_ray_tasks_give_the_local_outcomes_even_when_a_worker_dies_mid_flight(su
                         if os.path.exists(os.path.join(run_dir, "flight.bag.active")):
                             return pid, table
                 return None
-            runner, table = wait_for(flying_run, "a run in flight on the Ray worker")
+            runner, table = wait_for(flying_run, "a run in flight on the Ray worker", WAIT_S, poll=0.2)
             worker = table[runner][0]
             assert table[worker][1].startswith("ray::"), table[worker][1]
             killed_tree = descendants(worker, table) | {worker}
             os.kill(worker, signal.SIGKILL)
             # The run's processes (runner, roslaunch and its nodes, recorder) stop with the worker.
-            wait_for(lambda: not (killed_tree & set(process_table())), "the killed run's processes to stop", 120)
+            wait_for(lambda: not (killed_tree & set(process_table())), "the killed run's processes to stop", 120,
+                     poll=0.2)
             code, output = finish(sweep)
         finally:
             if sweep.poll() is None:
