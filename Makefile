@@ -16,7 +16,7 @@ APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip pytho
   libcv-bridge-dev python3-cv-bridge libimage-transport-dev libtf2-ros-dev python3-tf2-ros \
   libtf2-geometry-msgs-dev python3-tf2-geometry-msgs libopencv-dev python3-opencv libeigen3-dev \
   libgtest-dev googletest libosmesa6 libgl1 libglfw3 rviz \
-  python3-std-srvs libstd-srvs-dev
+  python3-std-srvs libstd-srvs-dev libyaml-cpp-dev
 
 .PHONY: all deps build test demo bench clean
 

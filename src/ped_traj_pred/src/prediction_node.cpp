@@ -1,6 +1,8 @@
 #include "ped_traj_pred/prediction_node.h"
 
 #include <nav_msgs/Path.h>
+#include <tf2/utils.h>
+#include <tf2_geometry_msgs/tf2_geometry_msgs.h>
 
 #include <algorithm>
 #include <cmath>
@@ -72,12 +74,6 @@ FilterParameters loadFilterParameters(const ros::NodeHandle& nh)
 std::string withoutLeadingSlash(const std::string& frame)
 {
   return (!frame.empty() && frame[0] == '/') ? frame.substr(1) : frame;
-}
-
-/// Rotation about z of the quaternion `q` [rad].
-double yawOf(const geometry_msgs::Quaternion& q)
-{
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
 }
 
 /// Quaternion of a rotation by `yaw` about z.
@@ -188,7 +184,7 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   if (!gps_pad_offset_.isZero())
   {
     // The receiver sits at the vehicle origin; the pad centre is offset in the vehicle frame.
-    pad += Eigen::Rotation2Dd(yawOf(q)) * gps_pad_offset_;
+    pad += Eigen::Rotation2Dd(tf2::getYaw(q)) * gps_pad_offset_;
   }
   if (!pad.allFinite())
   {
@@ -211,7 +207,7 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   const double yaw_variance = msg->pose.covariance[35];
   if (std::isfinite(yaw_variance) && yaw_variance > 0.0 && yaw_variance < kUnknownVariance)
   {
-    if (filter_.addHeading(stamp.toSec(), yawOf(q), yaw_variance) == MeasurementOutcome::kDroppedInvalid)
+    if (filter_.addHeading(stamp.toSec(), tf2::getYaw(q), yaw_variance) == MeasurementOutcome::kDroppedInvalid)
       ROS_WARN_THROTTLE(5.0, "Dropping a heading with NaN or inf on %s", gps_sub_.getTopic().c_str());
   }
   // ...and its yaw rate, if reported, the turn rate through the corners (vision alone follows them late).

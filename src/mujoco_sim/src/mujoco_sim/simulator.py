@@ -8,7 +8,9 @@ import os
 
 import numpy as np
 
-from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix, yaw_of
+from landing_msgs.geometry import yaw_from_quaternion
+
+from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix
 from .config import ConfigError
 from .environment import Battery, Wind, aerodynamic_force
 
@@ -432,7 +434,7 @@ class Simulator:
         """Heading-frame velocity as the AR.Drone's optical flow reports it, noisy."""
         velocity, _ = self.drone_velocity()
         _, quat = self.drone_pose()
-        yaw = yaw_of(quat_to_matrix(quat))
+        yaw = yaw_from_quaternion(*quat)
         c, s = math.cos(yaw), math.sin(yaw)
         std = (self.noise or {}).get("flow_velocity_std", 0)
         return (c * velocity[0] + s * velocity[1] + self._noise("flow", std),

@@ -25,12 +25,9 @@ import dataclasses
 import math
 
 import numpy as np
+from landing_msgs.geometry import yaw_from_quaternion
 
 from .params import EstimatorParams
-
-
-def yaw_from_quaternion(w, x, y, z):
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def heading_to_world(vx, vy, yaw):

@@ -30,6 +30,7 @@ import threading
 import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped, Twist
+from landing_msgs.geometry import yaw_from_quaternion
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
 from landing_msgs.rospy_node import init_node, spin
@@ -38,7 +39,7 @@ from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, String
 
 from .controller import DroneState, PadPrediction
-from .estimator import DroneEstimator, yaw_from_quaternion
+from .estimator import DroneEstimator
 from .params import EstimatorParams, ParamError, TrackingParams, from_mapping
 from .state_machine import Inputs, State, TrackingStateMachine
 
