@@ -172,6 +172,26 @@ def stress_sets():
                                  conditions={"wind_speed": 5.0, "wind_direction_deg": direction, "gust_mps": 1.25},
                                  description="5 m/s wind towards %d deg, gusts 1.25 m/s" % direction))
     sets["wind_5ms"] = wind
+    # Eight short runs (15-60 s of sim time) for timing sweeps (benchmark --jobs 2 against --ray) and the Ray
+    # tests: outcomes that do not hang on the last centimetre (an emergency landing, a no-go, a slow landing).
+    short = []
+    for k, seed in enumerate((3001, 3002)):
+        suffix = "ab"[k]
+        short.append(scenario("short_battery_10_%s" % suffix, seed=seed, path="circle", time_limit=40.0,
+                              events=[{"at_s": 6.0, "set_param": "drone_battery", "value": 10}],
+                              expect={"outcome": "emergency_landed", "no_pad_landing": True,
+                                      "decisions_include": [{"condition": "drone_battery_critical",
+                                                             "action": "emergency_landing"}]},
+                              description="battery 10 % six seconds after the take-off: emergency landing"))
+        short.append(scenario("short_wind_13_%s" % suffix, seed=seed + 10, conditions={"wind_speed": 13.0},
+                              time_limit=15.0, expect={"outcome": "timeout", "no_pad_landing": True,
+                                                       "decisions_include": [{"condition": "wind_critical",
+                                                                              "action": "no_go"}]},
+                              description="critical wind: no take-off"))
+        for speed in (0.5, 1.0):
+            short.append(scenario("short_straight_%gms_%s" % (speed, suffix), seed=seed + 20 + int(speed * 2),
+                                  speed=speed, time_limit=60.0, description="a landing on a slow straight path"))
+    sets["short_sweep"] = short
     return sets
 
 

@@ -10,7 +10,6 @@ import subprocess
 import sys
 
 import pytest
-import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "src", "landing_eval", "src"))
@@ -19,31 +18,18 @@ from landing_msgs.testing import wait_for  # noqa: E402
 
 SWEEP_TIMEOUT_S = 600  # one sweep of the three scenarios; about 30-60 s on a loaded 2-core machine
 WAIT_S = 300           # for a condition inside a sweep (a row, a flight under way, processes gone)
-
-
-def scenario(shipped, **changes):
-    with open(os.path.join(ROOT, "scenarios", shipped + ".yaml")) as stream:
-        s = yaml.safe_load(stream)
-    s.update(changes)
-    return s
-
-
-@pytest.fixture(scope="module")
-def suite(tmp_path_factory):
-    """Three short scenarios with outcomes that do not depend on the last centimetre."""
-    directory = tmp_path_factory.mktemp("suite")
-    battery = scenario("adverse_battery_10_in_flight", name="short_battery_10", time_limit_s=40.0)
-    battery["events"] = [{"at_s": 0, "operator": "landing"}, {"at_s": 6.0, "set_param": "drone_battery", "value": 10}]
-    for s in (battery, scenario("adverse_wind_13_at_start", name="short_wind_13", time_limit_s=15.0),
-              scenario("summit_straight_0.5ms", name="short_straight", time_limit_s=60.0)):
-        (directory / (s["name"] + ".yaml")).write_text(yaml.safe_dump(s))
-    return directory
+SHORT = os.path.join(ROOT, "scenarios", "stress", "short_sweep")
+# Three short runs with outcomes that do not hang on the last centimetre: an emergency landing, a no-go and
+# a slow landing on the pad.
+SUITE = [os.path.join(SHORT, name + ".yaml") for name in ("short_battery_10_a", "short_wind_13_a",
+                                                          "short_straight_0.5ms_a")]
+NAMES = {"short_battery_10_a", "short_wind_13_a", "short_straight_0.5ms_a"}
 
 
 def benchmark(args, **kwargs):
-    return subprocess.Popen(["rosrun", "landing_eval", "benchmark"] + [str(a) for a in args], stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, text=True, start_new_session=True,
-                            **kwargs)
+    return subprocess.Popen(["rosrun", "landing_eval", "benchmark"] + SUITE + [str(a) for a in args],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, text=True,
+                            start_new_session=True, **kwargs)
 
 
 def finish(process):
@@ -96,12 +82,12 @@ def descendants(pid, table):
 
 
 @pytest.fixture(scope="module")
-def local_sweep(suite, tmp_path_factory):
+def local_sweep(tmp_path_factory):
     """The three scenarios run locally with --jobs 2, interrupted (SIGINT to the sweep's process group, as
     Ctrl-C does) once the first result is written, then resumed: (output directory, the first sweep's rows,
     the resumed sweep's output)."""
     out = tmp_path_factory.mktemp("local")
-    first = benchmark([suite, "--out", out, "--jobs", "2"])
+    first = benchmark(["--out", out, "--jobs", "2"])
     try:
         wait_for(lambda: rows(out) or first.poll() is not None, "the first result of the local sweep", WAIT_S,
                  poll=0.2)
@@ -111,7 +97,7 @@ def local_sweep(suite, tmp_path_factory):
     code, output = finish(first)
     kept = rows(out)
     assert code == 130 or len(kept) == 3, output  # interrupted, unless all three had finished at once
-    code, resumed = finish(benchmark([suite, "--out", out, "--jobs", "2", "--resume"]))
+    code, resumed = finish(benchmark(["--out", out, "--jobs", "2", "--resume"]))
     assert code == 0, resumed
     return out, kept, resumed
 
@@ -120,17 +106,17 @@ def test_an_interrupted_sweep_keeps_its_results_and_resume_runs_only_the_rest(lo
     out, kept, resumed = local_sweep
     assert 1 <= len(kept) <= 3
     assert "%d runs already in" % len(kept) in resumed and "%d to run" % (3 - len(kept)) in resumed, resumed
-    assert set(outcomes(out)) == {"short_battery_10", "short_wind_13", "short_straight"}
+    assert set(outcomes(out)) == NAMES
     for row in kept:  # the rows of the interrupted sweep are kept as they were, not run again
         assert next(r for r in rows(out) if r["name"] == row["name"]) == row
     summary = (out / "summary.md").read_text()
     assert "| **all** | 3/3 |" in summary and "rows were kept from before" in summary, summary
 
 
-def test_ray_tasks_give_the_local_outcomes_even_when_a_worker_dies_mid_flight(suite, local_sweep, tmp_path):
+def test_ray_tasks_give_the_local_outcomes_even_when_a_worker_dies_mid_flight(local_sweep, tmp_path):
     out = tmp_path / "ray"
     with RayNode(num_cpus=2) as head:
-        sweep = benchmark([suite, "--out", out, "--ray", head.address])
+        sweep = benchmark(["--out", out, "--ray", head.address])
         try:
             # A run in flight: its runner's flight recorder is writing; its parent is the Ray worker.
             def flying_run():

@@ -33,7 +33,8 @@ def test_stress_sets_are_the_readme_figures_and_stay_out_of_the_suite():
     stress = os.path.join(SUITE, "stress")
     sets = {name: [scenario.load(f) for f in benchmark.collect([os.path.join(stress, name)])]
             for name in sorted(os.listdir(stress))}
-    assert {name: len(items) for name, items in sets.items()} == {"square_stop_and_go_3ms": 24, "wind_5ms": 30}
+    assert {name: len(items) for name, items in sets.items()} == {"short_sweep": 8, "square_stop_and_go_3ms": 24,
+                                                                  "wind_5ms": 30}
     seeded = sets["square_stop_and_go_3ms"]
     assert sorted(s["seed"] for s in seeded) == sorted(list(range(1001, 1013)) * 2)
     assert {(s["platform"]["path"], s["platform"]["speed_mps"]) for s in seeded} == {("square", 3.0),
