@@ -247,8 +247,9 @@ def main(argv=None):
     parser.add_argument("--out", required=True, help="output directory")
     parser.add_argument("--jobs", type=int, default=2, help="runs at once on this machine (each has its own master)")
     parser.add_argument("--ray", metavar="auto|ADDRESS", default=None,
-                        help="run each scenario as a task on a Ray cluster instead: 'auto' for the cluster this machine "
-                             "belongs to, or the head's HOST:PORT; every node needs the workspace built at this path")
+                        help="run each scenario as a task on a Ray cluster instead: 'auto' for the cluster this "
+                             "machine belongs to, or the head's HOST:PORT; every node needs the workspace built at "
+                             "this path")
     parser.add_argument("--cpus-per-scenario", type=float, default=1.0,
                         help="CPUs a Ray task reserves (default 1): Ray runs as many at once on a node as it has CPUs")
     parser.add_argument("--repeat", type=int, default=1, help="run each scenario this often and report the spread")

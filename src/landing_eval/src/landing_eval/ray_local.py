@@ -13,6 +13,7 @@ collide.
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import tempfile
 import time
@@ -25,6 +26,28 @@ STOP_TIMEOUT_S = 5.0     # SIGTERM to the node's process group, then SIGKILL aft
 WORKER_PORTS = 40        # ports a node's workers may listen on [-]
 
 
+_handed_out = set()  # ports given to a node of this process: a node's ports are not bound until it runs
+
+
+def _ports(count):
+    """``count`` consecutive free ports that no other node of this process has been given (Ray refuses a
+    port used by two of its components, and a second node's worker ports must not overlap the first's)."""
+    for _ in range(100):
+        base = free_port()
+        candidates = range(base, base + count)
+        if _handed_out.intersection(candidates):
+            continue
+        try:
+            for port in candidates:
+                with socket.socket() as sock:
+                    sock.bind(("127.0.0.1", port))
+        except OSError:
+            continue
+        _handed_out.update(candidates)
+        return base
+    raise RuntimeError("no %d free consecutive TCP ports for a Ray node" % count)
+
+
 class RayNode:
     """``ray start --block`` of a head (``address`` None) or of a node joining the head at ``address``."""
 
@@ -34,16 +57,16 @@ class RayNode:
         # Ray's socket paths must stay short (108 bytes): a short directory under /tmp.
         self.temp_dir = temp_dir or tempfile.mkdtemp(prefix="ray", dir="/tmp")
         self.log_path = log_path or os.path.join(self.temp_dir, "ray_start.log")
-        self.port = free_port() if address is None else None
+        self.port = _ports(1) if address is None else None
         self.address = "127.0.0.1:%d" % self.port if address is None else address
         self.process, self.process_returncode = None, None
 
     def command(self):
-        low = free_port()
-        ports = ["--node-manager-port", str(free_port()), "--object-manager-port", str(free_port()),
+        low = _ports(WORKER_PORTS + 1)
+        ports = ["--node-manager-port", str(_ports(1)), "--object-manager-port", str(_ports(1)),
                  "--min-worker-port", str(low), "--max-worker-port", str(low + WORKER_PORTS),
-                 "--metrics-export-port", str(free_port()), "--runtime-env-agent-port", str(free_port()),
-                 "--dashboard-agent-grpc-port", str(free_port()), "--dashboard-agent-listen-port", str(free_port())]
+                 "--metrics-export-port", str(_ports(1)), "--runtime-env-agent-port", str(_ports(1)),
+                 "--dashboard-agent-grpc-port", str(_ports(1)), "--dashboard-agent-listen-port", str(_ports(1))]
         role = ["--head", "--port", str(self.port),
                 "--include-dashboard", "false", "--temp-dir", self.temp_dir] if self.head_address is None \
             else ["--address", self.head_address]
@@ -68,7 +91,8 @@ class RayNode:
                 self.stop()
                 if exited:
                     raise RuntimeError("ray start exited with code %s: %s" % (self.process_returncode, last))
-                raise TimeoutError("ray start did not report a running node within %.0f s: %s" % (START_TIMEOUT_S, last))
+                raise TimeoutError("ray start did not report a running node within %.0f s: %s"
+                                   % (START_TIMEOUT_S, last))
             time.sleep(0.2)
 
     def pids(self):
