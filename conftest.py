@@ -16,8 +16,35 @@ def _can_open_a_pty():
     return True
 
 
+# tests/run_all.sh (make test) sets this: everything the tests need is installed there, so a test that
+# pytest.importorskip()s a missing module fails instead of passing as skipped.
+STRICT_IMPORTS = os.environ.get("LANDING_TESTS_STRICT_IMPORTS") == "1"
+
+
 def pytest_configure(config):
     config.addinivalue_line("markers", "needs_pty: the test types into a pseudo-terminal")
+
+
+def _as_import_failure(report):
+    """Turn ``report``, a skip for want of a module (pytest.importorskip), into a failure under make test."""
+    if STRICT_IMPORTS and report.skipped:
+        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else str(report.longrepr)
+        if "could not import" in reason:
+            report.outcome = "failed"
+            report.longrepr = "%s: under make test every module the tests need is installed (%s)" % (
+                report.nodeid or "collection", reason)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_make_collect_report(collector):
+    outcome = yield
+    _as_import_failure(outcome.get_result())
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    _as_import_failure(outcome.get_result())
 
 
 def pytest_collection_modifyitems(config, items):

@@ -27,3 +27,21 @@ def test_every_scenario_validates_and_names_are_unique():
     assert any(s["drone"]["start"] != "on_pad" for s in loaded)
     assert any(e.get("fault") == "camera_blackout" for s in loaded for e in s["events"])
     assert any(e.get("fault") == "detection_false_target" for s in loaded for e in s["events"])
+
+
+def test_stress_sets_are_the_readme_figures_and_stay_out_of_the_suite():
+    stress = os.path.join(SUITE, "stress")
+    sets = {name: [scenario.load(f) for f in benchmark.collect([os.path.join(stress, name)])]
+            for name in sorted(os.listdir(stress))}
+    assert {name: len(items) for name, items in sets.items()} == {"short_sweep": 8, "square_stop_and_go_3ms": 24,
+                                                                  "wind_5ms": 30}
+    seeded = sets["square_stop_and_go_3ms"]
+    assert sorted(s["seed"] for s in seeded) == sorted(list(range(1001, 1013)) * 2)
+    assert {(s["platform"]["path"], s["platform"]["speed_mps"]) for s in seeded} == {("square", 3.0),
+                                                                                     ("stop_and_go", 3.0)}
+    wind = sets["wind_5ms"]
+    assert {s["conditions"]["wind_speed"] for s in wind} == {5.0}
+    assert {s["platform"]["path"] for s in wind} == set(scenario.PATHS) - {"straight"}
+    assert {s["platform"]["speed_mps"] for s in wind} == {2.0, 3.0}
+    # make bench reads scenarios/ itself: none of these is in the suite
+    assert not [f for f in benchmark.collect([SUITE]) if os.sep + "stress" + os.sep in f]

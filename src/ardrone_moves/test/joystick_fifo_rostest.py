@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """rostest: js_event records written into a FIFO (the joystick node's ~device) drive ardrone/cmd_vel,
 take-off, land and operator/command through joystick + ardrone_joystick; unplug and re-plug."""
+import functools
 import os
 import threading
 import time
@@ -13,18 +14,14 @@ from sensor_msgs.msg import Joy
 from std_msgs.msg import Empty, String
 
 from ardrone_moves.joystick_device import EVENT_AXIS, EVENT_BUTTON, encode_event
+from landing_msgs import testing
 
 TIMEOUT = 60.0      # generous: the machine may be loaded
 FULL = 32767
 AXES, BUTTONS = 8, 14  # PS4 pad (Tables 3.1, 3.2)
 
 
-def wait_for(condition, what, timeout=TIMEOUT):
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
-        time.sleep(0.01)
+wait_for = functools.partial(testing.wait_for, timeout=TIMEOUT)
 
 
 class Recorder:

@@ -2,6 +2,7 @@
 
 The node runs from the source tree with the parameters of config/keyboard.yaml; a probe process
 (topic_probe.py) reports what it publishes. Every wait is on a condition with a generous timeout."""
+import functools
 import json
 import os
 import signal
@@ -13,6 +14,7 @@ import threading
 import time
 
 import pytest
+from landing_msgs import testing
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKAGE = os.path.dirname(HERE)
@@ -26,17 +28,7 @@ def free_port():
         return sock.getsockname()[1]
 
 
-def wait_for(condition, what, timeout=TIMEOUT, process=None):
-    deadline = time.monotonic() + timeout
-    while True:
-        result = condition()
-        if result:
-            return result
-        if process is not None and process.poll() is not None:
-            raise AssertionError("%s exited (code %s) while waiting for %s" % (process.args, process.returncode, what))
-        if time.monotonic() > deadline:
-            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
-        time.sleep(0.02)
+wait_for = functools.partial(testing.wait_for, timeout=TIMEOUT)
 
 
 def stop(process, sig=signal.SIGINT):

@@ -3,6 +3,7 @@
 Triangle, holds L1 (manual control), and the drone follows the right stick forward and left; on
 release it holds where it is while the vehicle drives away. Joystick events go into a FIFO read by
 the real joystick node; the drone is the real simulator. Ground truth only scores the flight."""
+import functools
 import math
 import os
 import threading
@@ -17,6 +18,7 @@ from landing_msgs.msg import Navdata
 from std_msgs.msg import String
 
 from ardrone_moves.joystick_device import EVENT_AXIS, EVENT_BUTTON, encode_event
+from landing_msgs import testing
 
 WALL_TIMEOUT = 180.0  # per wait [wall s]: the simulator may run slower than asked on a loaded machine
 FULL = 32767
@@ -60,13 +62,7 @@ class ManualJoystickTest(unittest.TestCase):
         with cls.lock:
             cls.vehicle_log.append((msg.header.stamp.to_sec(), msg.pose.position.x, msg.pose.position.y))
 
-    @staticmethod
-    def wait_for(condition, what, timeout=WALL_TIMEOUT):
-        deadline = time.monotonic() + timeout
-        while not condition():
-            if time.monotonic() > deadline or rospy.is_shutdown():
-                raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
-            time.sleep(0.02)
+    wait_for = staticmethod(functools.partial(testing.wait_for, timeout=WALL_TIMEOUT))
 
     def wait_sim(self, seconds, what):
         end = rospy.get_time() + seconds

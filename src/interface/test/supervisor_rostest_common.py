@@ -5,6 +5,7 @@ a few velocity commands on platform_tracking/cmd_vel, forwarded by cmd_vel_mux i
 waits on conditions in sim time, each with a generous wall-clock timeout. Nothing here sleeps to
 synchronise: every wait polls a condition.
 """
+import functools
 import json
 import math
 import threading
@@ -14,6 +15,7 @@ import rospy
 from geometry_msgs.msg import PoseStamped, Twist
 from landing_msgs.msg import Navdata, PositionXYCommand, Touchdown
 from std_msgs.msg import Bool, Empty, String
+from landing_msgs import testing
 
 WALL_TIMEOUT = 120.0   # per wait [wall s]; the simulator may run slower than its real-time factor
 REACTION_LIMIT = 1.0   # a condition change must be acted on within this [sim s]
@@ -77,16 +79,7 @@ class Harness:
             time.sleep(0.02)  # a publishing cadence, not a synchronisation
 
     # ----- waiting ------------------------------------------------------------------------------------
-    @staticmethod
-    def wait_for(condition, what, timeout=WALL_TIMEOUT):
-        deadline = time.monotonic() + timeout
-        while not condition():
-            if rospy.is_shutdown():
-                raise AssertionError("ROS shut down while waiting for " + what)
-            if time.monotonic() > deadline:
-                raise AssertionError("timed out after %.0f s (wall) waiting for %s (sim t=%.2f)"
-                                     % (timeout, what, rospy.get_time()))
-            time.sleep(0.01)
+    wait_for = staticmethod(functools.partial(testing.wait_for, timeout=WALL_TIMEOUT))
 
     def sim_wait(self, seconds, while_true=None, what=""):
         """Let ``seconds`` of sim time pass; with ``while_true``, fail as soon as it stops holding."""

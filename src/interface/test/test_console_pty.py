@@ -1,14 +1,15 @@
 """The operator console driven as a person would: keys through a pseudo-terminal, and as a script would:
 --commands with no terminal; both against a real roscore, checked on operator/command."""
+import functools
 import os
 import pty
 import signal
 import socket
 import subprocess
 import sys
-import time
 
 import pytest
+from landing_msgs import testing
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKAGE = os.path.dirname(HERE)
@@ -22,12 +23,7 @@ def free_port():
         return sock.getsockname()[1]
 
 
-def wait_for(condition, what, timeout=TIMEOUT):
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
-        time.sleep(0.05)
+wait_for = functools.partial(testing.wait_for, timeout=TIMEOUT)
 
 
 def stop(process):

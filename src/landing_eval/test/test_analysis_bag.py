@@ -313,8 +313,9 @@ def run_cli(args, cwd=None, env=None):
 
 
 def test_python_dash_m_works_in_a_clean_environment_without_ros(flight, tmp_path):
+    """From any directory: the venv finds the package through the .pth file `make build` writes."""
     out = str(tmp_path / "out")
-    result = subprocess.run([sys.executable, "-m", "landing_eval.analyze", flight, "--out", out], cwd=SRC,
+    result = subprocess.run([sys.executable, "-m", "landing_eval.analyze", flight, "--out", out], cwd=str(tmp_path),
                             env=clean_env(tmp_path), capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
     assert result.returncode == 0, result.stderr
     assert "landed_on_pad" in result.stdout
@@ -323,7 +324,7 @@ def test_python_dash_m_works_in_a_clean_environment_without_ros(flight, tmp_path
     code = ("import sys, landing_eval.analyze as a; a.analyze(sys.argv[1], sys.argv[2], plots=False); "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('rospy', 'rosbag', 'roslib', 'genpy', 'rosgraph')]; "
             "print('ROS modules:', bad); sys.exit(1 if bad else 0)")
-    result = subprocess.run([sys.executable, "-c", code, flight, str(tmp_path / "out2")], cwd=SRC,
+    result = subprocess.run([sys.executable, "-c", code, flight, str(tmp_path / "out2")], cwd=str(tmp_path),
                             env=clean_env(tmp_path), capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
     assert result.returncode == 0, result.stdout + result.stderr
 

@@ -2,6 +2,8 @@
 import os
 import sys
 
+import pytest
+
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
 from landing_eval import benchmark  # noqa: E402
 
@@ -40,9 +42,60 @@ def test_summary_groups_and_lists_every_miss():
 def test_bad_scenario_file_is_an_error_row_not_a_success(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\nplatform: {speed_mps: fast}\n")
-    row = benchmark.run_one(str(bad), str(tmp_path), None)
-    assert row["outcome"] == "error" and not row["passed"] and "speed_mps" in row["error"]
+    specs, rows = benchmark.plan([str(bad)], 2, str(tmp_path))
+    assert specs == [] and [r["run"] for r in rows] == [1, 2]
+    assert all(r["outcome"] == "error" and not r["passed"] and "speed_mps" in r["error"] for r in rows)
     assert benchmark.collect([str(tmp_path)]) == [str(bad)]
+
+
+SCENARIO = """name: %s
+seed: 3
+time_limit_s: 30
+platform: {vehicle: summit_xl, path: circle, speed_mps: 1.0, radius_m: 10.0}
+"""
+
+
+def test_plan_repeats_each_scenario_into_runs_of_their_own(tmp_path):
+    (tmp_path / "a.yaml").write_text(SCENARIO % "alpha")
+    specs, bad = benchmark.plan([str(tmp_path / "a.yaml")], 3, str(tmp_path / "out"))
+    assert bad == [] and [s["row"]["run"] for s in specs] == [1, 2, 3]
+    assert [os.path.basename(s["out_dir"]) for s in specs] == ["alpha", "alpha.run2", "alpha.run3"]
+    assert all(s["wall_timeout"] == 300.0 and "seed: 3" in s["scenario_text"] for s in specs)
+
+
+def test_two_files_with_one_scenario_name_are_refused(tmp_path):
+    for f in ("a.yaml", "b.yaml"):
+        (tmp_path / f).write_text(SCENARIO % "same")
+    with pytest.raises(ValueError, match="both name their scenario 'same'"):
+        benchmark.plan(benchmark.collect([str(tmp_path)]), 1, str(tmp_path / "out"))
+
+
+def test_a_failed_run_is_an_error_row_and_a_result_is_checked_against_expect(tmp_path):
+    (tmp_path / "a.yaml").write_text(SCENARIO % "alpha")
+    spec = benchmark.plan([str(tmp_path / "a.yaml")], 1, str(tmp_path))[0][0]
+    row = benchmark.row_of(spec, {"result": None, "node": "n1", "failure": "run_scenario exited with 3"})
+    assert row["outcome"] == "error" and not row["passed"] and row["node"] == "n1"
+    row = benchmark.row_of(spec, {"result": {"outcome": "timeout", "decisions": [{}]}, "node": "n2"})
+    assert row["outcome"] == "timeout" and not row["passed"] and "expected landed_on_pad" in row["error"]
+    row = benchmark.row_of(spec, {"result": {"outcome": "landed_on_pad", "touchdown_error_m": 0.05}, "node": "n2"})
+    assert row["passed"] and row["touchdown_error_m"] == 0.05 and row["run"] == 1
+
+
+def test_spread_reports_each_repeated_scenario():
+    rows = [{"name": "a", "run": r, "outcome": "landed_on_pad", "passed": True, "touchdown_error_m": e,
+             "time_to_land_s": t} for r, e, t in ((1, 0.026, 30.0), (2, 0.015, 32.5), (3, 0.020, 31.0))]
+    rows.append({"name": "b", "run": 1, "outcome": "timeout", "passed": False})
+    text = benchmark.spread(rows)
+    assert "| a | 3 | 3 | landed_on_pad x3 | 0.015 | 0.020 | 0.026 | 0.006 | 30.0-32.5 |" in text
+    assert "| b |" not in text
+    assert benchmark.spread(rows[3:]) == ""
+
+
+def test_provenance_names_the_commit_and_the_command(monkeypatch):
+    monkeypatch.setattr(sys, "argv", ["benchmark", "scenarios", "--out", "/tmp/x y"])
+    commit, command = benchmark.provenance()
+    assert commit != "unknown" and len(commit.split("-")[0]) >= 7
+    assert command == "rosrun landing_eval benchmark scenarios --out '/tmp/x y'"
 
 
 def test_percentile():
@@ -54,6 +107,7 @@ def test_percentile():
 def test_readme_block_is_replaced(tmp_path):
     readme = tmp_path / "README.md"
     readme.write_text("intro\n<!-- bench:start -->\nold\n<!-- bench:end -->\nafter\n")
-    benchmark.update_readme(str(readme), "| table |", 600.0, 3)
+    benchmark.update_readme(str(readme), "3 scenarios at commit `abc`", "| table |")
     text = readme.read_text()
-    assert "old" not in text and "| table |" in text and "3 scenarios" in text and text.endswith("after\n")
+    assert "old" not in text and "| table |" in text and "3 scenarios at commit `abc`" in text
+    assert text.endswith("<!-- bench:end -->\nafter\n")

@@ -64,3 +64,40 @@ def test_sigint_ends_a_sleep_on_a_stopped_sim_clock(ros_master):
     node, _ = start(SIM_TIME_SLEEP, env)
     code, out = stop(node)
     assert code == 0 and "returned" in out
+
+
+TICKING_NODE = """
+import sys
+from landing_msgs.rospy_node import run_node, spin_at
+
+class Node:
+    def __init__(self):
+        if "{fail}":
+            raise ValueError("parameter ~rate_hz is missing")
+        self.ticks = 0
+    def tick(self):
+        self.ticks += 1
+        print("tick %d" % self.ticks, flush=True)
+    def spin(self):
+        spin_at(50.0, self.tick)
+
+sys.exit(run_node("ticking", Node, startup_errors=(ValueError,)))
+"""
+
+
+def test_run_node_ticks_the_node_until_sigint_and_exits_0(ros_master):
+    _, env = ros_master
+    node = subprocess.Popen([sys.executable, "-c", TICKING_NODE.format(fail="")], env=env, stdout=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    lines = [node.stdout.readline() for _ in range(3)]
+    assert lines == ["tick 1\n", "tick 2\n", "tick 3\n"], lines
+    code, _ = stop(node)
+    assert code == 0
+
+
+def test_run_node_turns_a_startup_error_into_a_fatal_message_and_exit_status_2(ros_master):
+    _, env = ros_master
+    result = subprocess.run([sys.executable, "-c", TICKING_NODE.format(fail="yes")], env=env, capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 2
+    assert "parameter ~rate_hz is missing" in result.stdout + result.stderr

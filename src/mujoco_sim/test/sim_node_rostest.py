@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """rostest of the simulator node: topics, rates (in sim time), tf, conditions, take-off and landing."""
+import functools
 import math
-import time
 import unittest
 
 import rospy
@@ -12,6 +12,7 @@ from landing_msgs.msg import Altimeter, Navdata, Touchdown
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
 from std_msgs.msg import Empty
+from landing_msgs import testing
 
 WALL_TIMEOUT = 120.0
 RATES = {  # topic: (type, expected rate in sim time [Hz])
@@ -23,12 +24,7 @@ RATES = {  # topic: (type, expected rate in sim time [Hz])
 }
 
 
-def wait_for(condition, what, timeout=WALL_TIMEOUT):
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError("timed out waiting for " + what)
-        time.sleep(0.02)
+wait_for = functools.partial(testing.wait_for, timeout=WALL_TIMEOUT)
 
 
 class SimNodeTest(unittest.TestCase):

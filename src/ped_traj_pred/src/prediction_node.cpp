@@ -1,6 +1,8 @@
 #include "ped_traj_pred/prediction_node.h"
 
 #include <nav_msgs/Path.h>
+#include <tf2/utils.h>
+#include <tf2_geometry_msgs/tf2_geometry_msgs.h>
 
 #include <algorithm>
 #include <cmath>
@@ -74,12 +76,6 @@ FilterParameters loadFilterParameters(const ros::NodeHandle& nh)
 std::string withoutLeadingSlash(const std::string& frame)
 {
   return (!frame.empty() && frame[0] == '/') ? frame.substr(1) : frame;
-}
-
-/// Rotation about z of the quaternion `q` [rad].
-double yawOf(const geometry_msgs::Quaternion& q)
-{
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
 }
 
 /// Quaternion of a rotation by `yaw` about z.
@@ -201,7 +197,7 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   {
     Eigen::Vector2d pad(p.x, p.y);
     // The receiver sits at the vehicle origin; the pad centre is offset in the vehicle frame.
-    pad += Eigen::Rotation2Dd(yawOf(q)) * gps_pad_offset_;
+    pad += Eigen::Rotation2Dd(tf2::getYaw(q)) * gps_pad_offset_;
     if (!pad.allFinite())
     {
       ROS_WARN_THROTTLE(5.0, "Dropping a GPS fix with NaN or inf on %s", gps_sub_.getTopic().c_str());
@@ -227,9 +223,9 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   const double yaw_variance = msg->pose.covariance[35];
   if (std::isfinite(yaw_variance) && yaw_variance > 0.0 && yaw_variance < kUnknownVariance)
   {
-    if (std::isfinite(yawOf(q)))
+    if (std::isfinite(tf2::getYaw(q)))
     {
-      report.heading = yawOf(q);
+      report.heading = tf2::getYaw(q);
       report.heading_variance = yaw_variance;
     }
     else

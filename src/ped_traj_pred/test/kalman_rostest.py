@@ -8,6 +8,7 @@ the detections have been gone for longer than the coast time, and that the vehic
 track alive without vision. Waits are on conditions, with wall
 timeouts; the driver's pacing is the only sleep.
 """
+import functools
 import math
 import random
 import threading
@@ -19,6 +20,7 @@ import rostest
 from geometry_msgs.msg import PointStamped
 from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock, Log
+from landing_msgs import testing
 
 NODE = "/prediction_kalman_node"
 RADIUS, SPEED, PAD_HEIGHT = 10.0, 3.0, 0.497  # [m], [m/s], [m]
@@ -43,12 +45,7 @@ def pad_velocity(t):
     return SPEED * math.cos(angle), SPEED * math.sin(angle)
 
 
-def wait_for(condition, what, timeout=WALL_TIMEOUT):
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError("timed out after %.0f s (wall) waiting for %s" % (timeout, what))
-        time.sleep(0.02)
+wait_for = functools.partial(testing.wait_for, timeout=WALL_TIMEOUT)
 
 
 def percentile(values, fraction):

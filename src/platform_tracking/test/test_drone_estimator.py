@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from platform_tracking.estimator import DroneEstimator, heading_to_world, world_to_heading, yaw_from_quaternion
+from landing_msgs.geometry import yaw_from_quaternion
+from platform_tracking.estimator import DroneEstimator, heading_to_world, world_to_heading
 from platform_tracking.params import EstimatorParams
 
 GPS_STD, FLOW_STD, ALT_STD, SONAR_STD = 0.3, 0.05, 0.1, 0.01

@@ -2,8 +2,8 @@
 """rostest: the estimator and tracker nodes fly the simulated drone from the pad of the moving Summit
 XL back onto it, commanded through platform_tracking/command. Waits are on sim-time conditions; the
 wall clock only bounds them."""
+import functools
 import math
-import time
 import unittest
 
 import rospy
@@ -11,16 +11,12 @@ import rostest
 from landing_msgs.msg import Touchdown
 from nav_msgs.msg import Odometry
 from std_msgs.msg import String
+from landing_msgs import testing
 
 WALL_TIMEOUT = 300.0
 
 
-def wait_for(condition, what, timeout=WALL_TIMEOUT):
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError("timed out waiting for " + what)
-        time.sleep(0.05)
+wait_for = functools.partial(testing.wait_for, timeout=WALL_TIMEOUT)
 
 
 class FlightTest(unittest.TestCase):

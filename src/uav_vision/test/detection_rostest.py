@@ -3,6 +3,7 @@
 sideways, and check the published pad position against the simulator's ground truth (allowed here,
 for scoring). Stands in for the drone's position estimator by forwarding /ardrone/gps/odom to
 /ardrone/odom_estimate, so that the world topic is exercised too."""
+import functools
 import bisect
 import math
 import threading
@@ -16,6 +17,7 @@ from geometry_msgs.msg import PointStamped, PoseStamped, Twist
 from landing_msgs.msg import Navdata
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Empty
+from landing_msgs import testing
 
 WALL_TIMEOUT = 120.0           # generous: the simulator shares two cores with the node and the test
 RELATIVE_TOLERANCE = 0.15      # pad centre relative to the drone [m]
@@ -23,12 +25,7 @@ WORLD_TOLERANCE = 1.5          # world position: the stand-in estimate is a GPS 
 STRIP_OFFSET = 0.36            # heading strip centre ahead of the pad centre [m]
 
 
-def wait_for(condition, what, timeout=WALL_TIMEOUT):
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
-        time.sleep(0.02)
+wait_for = functools.partial(testing.wait_for, timeout=WALL_TIMEOUT)
 
 
 def rotation(q):

@@ -5,7 +5,7 @@ import sys
 import rospy
 from geometry_msgs.msg import Twist
 from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import init_node
+from landing_msgs.rospy_node import run_node, spin_at
 from std_msgs.msg import String
 
 from .cmd_vel_mux import CommandSelector
@@ -57,26 +57,11 @@ class MuxNode:
         self.lockstep.ack(now)
 
     def spin(self):
-        rate = rospy.Rate(self.rate_hz)  # sim time
-        while not rospy.is_shutdown():
-            self.tick()
-            try:
-                rate.sleep()
-            except rospy.ROSTimeMovedBackwardsException:
-                pass
-            except rospy.ROSInterruptException:
-                break
+        spin_at(self.rate_hz, self.tick)
 
 
 def main():
-    init_node("cmd_vel_mux")
-    try:
-        node = MuxNode()
-    except ValueError as err:
-        rospy.logfatal(str(err))
-        return 2
-    node.spin()
-    return 0
+    return run_node("cmd_vel_mux", MuxNode, startup_errors=(ValueError,))
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ import rospy
 from geometry_msgs.msg import PointStamped, Twist
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
-from landing_msgs.rospy_node import init_node
+from landing_msgs.rospy_node import run_node, spin_at
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 from std_msgs.msg import Empty, String
@@ -126,27 +126,11 @@ class EmergencyNode:
             self.state_sent = out.phase
 
     def spin(self):
-        rate = rospy.Rate(self.rate_hz)  # sim time
-        while not rospy.is_shutdown():
-            if rospy.get_time() > 0.0:
-                self.tick()
-            try:
-                rate.sleep()
-            except rospy.ROSTimeMovedBackwardsException:
-                pass
-            except rospy.ROSInterruptException:
-                break
+        spin_at(self.rate_hz, self.tick)
 
 
 def main():
-    init_node("emergency")
-    try:
-        node = EmergencyNode()
-    except SettingsError as err:
-        rospy.logfatal(str(err))
-        return 2
-    node.spin()
-    return 0
+    return run_node("emergency", EmergencyNode, startup_errors=(SettingsError,))
 
 
 if __name__ == "__main__":

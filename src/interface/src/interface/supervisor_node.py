@@ -18,8 +18,8 @@ import threading
 import rospy
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Navdata
-from landing_msgs.rospy_node import init_node
 from geometry_msgs.msg import PointStamped
+from landing_msgs.rospy_node import run_node, spin_at
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger, TriggerResponse
@@ -235,27 +235,11 @@ class SupervisorNode:
         self.lockstep.ack(now)
 
     def spin(self):
-        rate = rospy.Rate(self.params["rate_hz"])  # sim time
-        while not rospy.is_shutdown():
-            if rospy.get_time() > 0.0:  # the clock runs (a scenario may hold the physics at first)
-                self.tick()
-            try:
-                rate.sleep()
-            except rospy.ROSTimeMovedBackwardsException:
-                rospy.logwarn("supervisor: sim time moved backwards; carrying on")
-            except rospy.ROSInterruptException:
-                break
+        spin_at(self.params["rate_hz"], self.tick)
 
 
 def main():
-    init_node("supervisor")
-    try:
-        node = SupervisorNode()
-    except StartupError as err:
-        rospy.logfatal(str(err))
-        return 2
-    node.spin()
-    return 0
+    return run_node("supervisor", SupervisorNode, startup_errors=(StartupError,))
 
 
 if __name__ == "__main__":

@@ -4,20 +4,18 @@ results.csv and summary.md with success rates and error statistics grouped by ve
 A scenario whose file is bad, whose run fails or whose `expect:` block is not met is counted as such,
 never as a success."""
 import argparse
-import concurrent.futures
-import csv
 import json
 import math
 import os
+import shlex
+import signal
 import subprocess
 import sys
 import time
 
+from . import run_pool
 from . import scenario as scenario_mod
-
-CSV_FIELDS = ("name", "file", "vehicle", "path", "speed_mps", "wind_speed", "outcome", "expected", "passed",
-              "touchdown_error_m", "time_to_land_s", "decisions", "emergency_position", "sim_time_s", "wall_time_s",
-              "real_time_factor", "error")
+from .results_store import CSV_FIELDS, ResultsFile, ResultsFileError  # noqa: F401 (CSV_FIELDS: the columns)
 
 
 def collect(paths):
@@ -66,30 +64,45 @@ def check_expectations(expect, result):
     return not problems, "; ".join(problems)
 
 
-def run_one(path, out_root, wall_timeout):
-    """Run one scenario in a subprocess; always returns a row (errors included)."""
-    row = {"file": path, "name": os.path.splitext(os.path.basename(path))[0], "passed": False}
-    try:
-        s = scenario_mod.load(path)
-    except scenario_mod.ScenarioError as err:
-        row.update(outcome="error", error=str(err))
+def plan(files, repeat, out_root):
+    """(runs to make, rows of files that cannot be run). A run is a spec for run_pool.execute_run plus its
+    row's scenario fields; with ``repeat`` > 1 each scenario is run that often (run 1, 2, ...)."""
+    specs, bad, names = [], [], {}
+    for path in files:
+        name = os.path.splitext(os.path.basename(path))[0]
+        try:
+            s = scenario_mod.load(path)
+            with open(path) as stream:
+                text = stream.read()
+        except (scenario_mod.ScenarioError, OSError) as err:
+            bad += [{"file": path, "name": name, "run": run, "passed": False, "outcome": "error", "error": str(err),
+                     "decisions": 0} for run in range(1, repeat + 1)]
+            continue
+        if s["name"] in names:
+            raise ValueError("%s and %s both name their scenario %r: their runs would overwrite each other's output"
+                             % (names[s["name"]], path, s["name"]))
+        names[s["name"]] = path
+        row = {"file": path, "name": s["name"], "vehicle": s["platform"]["vehicle"], "path": s["platform"]["path"],
+               "speed_mps": s["platform"]["speed_mps"], "wind_speed": s["conditions"]["wind_speed"],
+               "expected": json.dumps(s["expect"].get("outcome", "landed_on_pad")), "passed": False}
+        for run in range(1, repeat + 1):
+            label = s["name"] if run == 1 else "%s.run%d" % (s["name"], run)
+            specs.append({"python": sys.executable, "file": os.path.abspath(path), "scenario_text": text,
+                          "out_dir": os.path.abspath(os.path.join(out_root, label)),
+                          "log": os.path.abspath(os.path.join(out_root, label + ".log")),
+                          "wall_timeout": max(300.0, 4.0 * s["time_limit_s"]),
+                          "row": dict(row, run=run), "expect": s["expect"]})
+    return specs, bad
+
+
+def row_of(spec, outcome):
+    """The results row of a finished run (errors included: a run that failed is never a success)."""
+    row = dict(spec["row"], node=outcome.get("node"))
+    result = outcome.get("result")
+    if result is None:
+        row.update(outcome="error", error=outcome.get("failure") or "no result")
         return row
-    row.update(name=s["name"], vehicle=s["platform"]["vehicle"], path=s["platform"]["path"],
-               speed_mps=s["platform"]["speed_mps"], wind_speed=s["conditions"]["wind_speed"],
-               expected=json.dumps(s["expect"].get("outcome", "landed_on_pad")))
-    out_dir = os.path.join(out_root, s["name"])
-    command = [sys.executable, "-m", "landing_eval.runner_cli", path, "--out", out_dir]
-    if wall_timeout:
-        command += ["--wall-timeout", str(wall_timeout)]
-    with open(os.path.join(out_root, s["name"] + ".log"), "w") as log:
-        proc = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
-    result_file = os.path.join(out_dir, "result.json")
-    if proc.returncode != 0 or not os.path.isfile(result_file):
-        row.update(outcome="error", error="run_scenario exited with %d; see %s.log" % (proc.returncode, s["name"]))
-        return row
-    with open(result_file) as stream:
-        result = json.load(stream)
-    passed, why = check_expectations(s["expect"], result)
+    passed, why = check_expectations(spec["expect"], result)
     row.update({k: result.get(k) for k in ("outcome", "touchdown_error_m", "time_to_land_s", "sim_time_s",
                                            "wall_time_s", "real_time_factor", "emergency_position")})
     row["decisions"] = len(result.get("decisions") or [])
@@ -141,65 +154,167 @@ def summarize(rows, groups=("vehicle", "path", "band")):
     return "\n".join(lines)
 
 
-def write_outputs(rows, out_dir, elapsed):
-    with open(os.path.join(out_dir, "results.csv"), "w", newline="") as stream:
-        writer = csv.DictWriter(stream, fieldnames=CSV_FIELDS, extrasaction="ignore")
-        writer.writeheader()
-        writer.writerows(rows)
+def spread(rows):
+    """Markdown table of the scenarios run more than once: outcomes and the spread of the error and the
+    time to land over the runs (the closed loop is not bit-for-bit repeatable). Empty if none was."""
+    by_name = {}
+    for row in rows:
+        by_name.setdefault(row["name"], []).append(row)
+    repeated = {name: runs for name, runs in sorted(by_name.items()) if len(runs) > 1}
+    if not repeated:
+        return ""
+    fmt = lambda v: "-" if v is None else "%.3f" % v  # noqa: E731
+    lines = ["| scenario | runs | passed | outcomes | error min [m] | error mean [m] | error max [m] | error std [m] | "
+             "time to land min-max [s] |", "|" + "---|" * 9]
+    for name, runs in repeated.items():
+        outcomes = {}
+        for r in runs:
+            outcomes[r.get("outcome")] = outcomes.get(r.get("outcome"), 0) + 1
+        errors = [r["touchdown_error_m"] for r in runs if r.get("touchdown_error_m") is not None]
+        times = [r["time_to_land_s"] for r in runs if r.get("time_to_land_s") is not None]
+        mean = sum(errors) / len(errors) if errors else None
+        std = math.sqrt(sum((e - mean) ** 2 for e in errors) / (len(errors) - 1)) if len(errors) > 1 else None
+        lines.append("| %s | %d | %d | %s | %s | %s | %s | %s | %s |" % (
+            name, len(runs), sum(r["passed"] for r in runs),
+            ", ".join("%s x%d" % (o, n) for o, n in sorted(outcomes.items(), key=lambda i: str(i[0]))),
+            fmt(min(errors) if errors else None), fmt(mean), fmt(max(errors) if errors else None), fmt(std),
+            "-" if not times else "%.1f-%.1f" % (min(times), max(times))))
+    return "\n".join(lines)
+
+
+def provenance():
+    """(commit, command line) of this run: the short hash of the workspace's HEAD, '-dirty' with
+    uncommitted changes to tracked files; the command as typed."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    try:
+        commit = subprocess.run(["git", "-C", here, "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                                timeout=30).stdout.strip() or "unknown"
+        dirty = subprocess.run(["git", "-C", here, "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=30).stdout.strip()
+    except (OSError, subprocess.TimeoutExpired):
+        commit, dirty = "unknown", ""
+    command = "rosrun landing_eval benchmark " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    return commit + ("-dirty" if dirty else ""), command
+
+
+def describe(rows, sources, elapsed, executor, resumed):
+    """The line that heads a sweep's table: what ran, where, when, on which commit, with which command."""
+    import platform
+    commit, command = provenance()
+    runs = "%d runs of %d scenarios" % (len(rows), len({r["name"] for r in rows})) \
+        if len(rows) != len({r["name"] for r in rows}) else "%d scenarios" % len(rows)
+    return "%s of %s on %s at commit `%s` (%s, %d cores, %s), %.0f min wall%s:\n`%s`" % (
+        runs, ", ".join("`%s`" % s for s in sources), time.strftime("%Y-%m-%d"), commit, platform.machine(),
+        os.cpu_count(), executor, elapsed / 60.0, " in this invocation (%d rows were kept from before)" % resumed
+        if resumed else "", command)
+
+
+def write_summary(rows, out_dir, heading):
     summary = summarize(rows)
+    repeats = spread(rows)
+    text = summary + ("\n\nSpread over the repeated runs:\n\n" + repeats if repeats else "")
     with open(os.path.join(out_dir, "summary.md"), "w") as stream:
-        stream.write("# Benchmark summary\n\n%d scenarios in %.0f s wall (%s)\n\n%s\n" % (
-            len(rows), elapsed, time.strftime("%Y-%m-%d %H:%M"), summary))
-    return summary
+        stream.write("# Benchmark summary\n\n%s\n\n%s\n" % (heading, text))
+    return text
 
 
 README_START, README_END = "<!-- bench:start -->", "<!-- bench:end -->"
 
 
-def update_readme(readme, summary, elapsed, count):
+def update_readme(readme, heading, text):
     """Replace the block between the bench markers of ``readme`` with this run's table."""
-    import platform
     with open(readme) as stream:
-        text = stream.read()
-    if README_START not in text or README_END not in text:
+        content = stream.read()
+    if README_START not in content or README_END not in content:
         raise ValueError("%s has no %s ... %s block to replace" % (readme, README_START, README_END))
-    block = "%s\n%d scenarios of `scenarios/` on %s (%s, %d cores), %.0f min wall with `--jobs 2`:\n\n%s\n%s" % (
-        README_START, count, time.strftime("%Y-%m-%d"), platform.machine(), os.cpu_count(), elapsed / 60.0,
-        summary, README_END)
-    head, rest = text.split(README_START, 1)
+    head, rest = content.split(README_START, 1)
     with open(readme, "w") as stream:
-        stream.write(head + block + rest.split(README_END, 1)[1])
+        stream.write("%s%s\n%s\n\n%s\n%s%s" % (head, README_START, heading, text, README_END,
+                                                rest.split(README_END, 1)[1]))
+
+
+def _interrupt_on_sigterm():
+    def handler(signum, _frame):
+        raise KeyboardInterrupt("signal %s" % signal.Signals(signum).name)
+    signal.signal(signal.SIGTERM, handler)
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description="Run many landing scenarios in parallel and summarise them.")
-    parser.add_argument("scenarios", nargs="+", help="scenario files or directories of them")
+    parser = argparse.ArgumentParser(
+        description="Run many landing scenarios (local processes or Ray tasks) and summarise them: results.csv "
+                    "(a row per run, written as it finishes) and summary.md in --out.")
+    parser.add_argument("scenarios", nargs="+", help="scenario files or directories of them (not searched recursively)")
     parser.add_argument("--out", required=True, help="output directory")
-    parser.add_argument("--jobs", type=int, default=2, help="scenarios run at once (each has its own master)")
-    parser.add_argument("--wall-timeout", type=float, default=None, help="wall-clock limit per scenario [s]")
+    parser.add_argument("--jobs", type=int, default=2, help="runs at once on this machine (each has its own master)")
+    parser.add_argument("--ray", metavar="auto|ADDRESS", default=None,
+                        help="run each scenario as a task on a Ray cluster instead: 'auto' for the cluster this "
+                             "machine belongs to, or the head's HOST:PORT; every node needs the workspace built at "
+                             "this path")
+    parser.add_argument("--cpus-per-scenario", type=float, default=1.0,
+                        help="CPUs a Ray task reserves (default 1): Ray runs as many at once on a node as it has CPUs")
+    parser.add_argument("--repeat", type=int, default=1, help="run each scenario this often and report the spread")
+    parser.add_argument("--resume", action="store_true",
+                        help="keep the rows of --out/results.csv and run only the runs it does not have yet")
+    parser.add_argument("--wall-timeout", type=float, default=None,
+                        help="wall-clock limit of one flight [s] (default: 4 x its time limit, at least 300 s)")
     parser.add_argument("--readme", default=None, help="README whose bench block gets this run's table")
     args = parser.parse_args(argv)
+    if args.repeat < 1 or args.jobs < 1 or args.cpus_per_scenario <= 0:
+        parser.error("--repeat and --jobs must be >= 1 and --cpus-per-scenario > 0")
     files = collect(args.scenarios)
     if not files:
         print("benchmark: no scenario files in %s" % " ".join(args.scenarios), file=sys.stderr)
         return 2
     os.makedirs(args.out, exist_ok=True)
+    try:
+        specs, bad = plan(files, args.repeat, args.out)
+        results = ResultsFile(os.path.join(args.out, "results.csv"), resume=args.resume)
+    except (ValueError, ResultsFileError) as err:
+        print("benchmark: %s" % err, file=sys.stderr)
+        return 2
+    if args.wall_timeout:
+        for spec in specs:
+            spec["wall_timeout"] = args.wall_timeout
+    kept = len(results.rows)
+    for row in bad:
+        results.append(row)
+    todo = [spec for spec in specs if (spec["row"]["name"], spec["row"]["run"]) not in results.done]
+    if args.resume:
+        print("benchmark: %d runs already in %s, %d to run" % (kept, results.path, len(todo)))
+    _interrupt_on_sigterm()
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-    rows, start = [], time.monotonic()
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  transient=False) as progress:
-        task = progress.add_task("scenarios", total=len(files))
-        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-            futures = [pool.submit(run_one, f, args.out, args.wall_timeout) for f in files]
-            for future in concurrent.futures.as_completed(futures):
-                row = future.result()
-                rows.append(row)
-                progress.update(task, advance=1, description="%s: %s" % (row["name"], row.get("outcome")))
-    rows.sort(key=lambda r: r["name"])
-    elapsed = time.monotonic() - start
-    summary = write_outputs(rows, args.out, elapsed)
+    start = time.monotonic()
+    executor = "Ray cluster %s, %g CPU a run" % (args.ray, args.cpus_per_scenario) if args.ray else \
+        "--jobs %d" % args.jobs
+    # a run's longest wall time: with nothing finished for twice that, the cluster is taken as gone
+    idle_timeout = 2 * max([s["wall_timeout"] + run_pool.START_STOP_MARGIN_S for s in todo] or [0])
+    runs = run_pool.ray_runs(todo, args.ray, args.cpus_per_scenario, idle_timeout) if args.ray else \
+        run_pool.local_runs(todo, args.jobs)
+    try:
+        with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                      transient=False) as progress:
+            task = progress.add_task("scenarios", total=len(files) * args.repeat, completed=len(results.rows))
+            for spec, outcome in runs:
+                row = row_of(spec, outcome)
+                if results.append(row):
+                    progress.update(task, advance=1, description="%s: %s" % (row["name"], row.get("outcome")))
+    except KeyboardInterrupt:
+        runs.close()
+        results.close()
+        print("benchmark: interrupted; %d of %d runs are in %s: --resume runs the rest"
+              % (len(results.rows), len(files) * args.repeat, results.path), file=sys.stderr)
+        return 130
+    except (ConnectionError, TimeoutError) as err:
+        results.close()
+        print("benchmark: %s; %d runs are in %s: --resume runs the rest" % (err, len(results.rows), results.path),
+              file=sys.stderr)
+        return 3
+    results.close()
+    rows = sorted(results.rows, key=lambda r: (r["name"], r["run"]))
+    heading = describe(rows, args.scenarios, time.monotonic() - start, executor, kept if args.resume else 0)
+    text = write_summary(rows, args.out, heading)
     if args.readme:
-        update_readme(args.readme, summary, elapsed, len(rows))
-    print(summary)
-    print("results: %s, %s" % (os.path.join(args.out, "results.csv"), os.path.join(args.out, "summary.md")))
+        update_readme(args.readme, heading, text)
+    print(text)
+    print("results: %s, %s" % (results.path, os.path.join(args.out, "summary.md")))
     return 0 if all(r["passed"] for r in rows) else 1

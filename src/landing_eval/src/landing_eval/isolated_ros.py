@@ -1,6 +1,7 @@
 """Run a launch file under its own ROS master on a free port, so several runs can coexist; run more
 processes against that master; and check that every subscription in its graph is connected (and ask a
 subscriber that gave up on a publisher to try again)."""
+import ctypes
 import os
 import random
 import signal
@@ -8,6 +9,19 @@ import socket
 import subprocess
 import time
 import xmlrpc.client
+
+_PR_SET_PDEATHSIG = 1  # prctl option (linux/prctl.h)
+
+
+def signal_on_parent_death(signum):
+    """In a child about to exec (preexec_fn): have the kernel send ``signum`` when the thread that started it
+    ends, however that ends (a SIGKILL too), so that nothing outlives the process that was to stop it.
+    Kept across exec. Also restores SIGINT's default action and unblocks SIGINT and SIGTERM, which a Ray
+    worker blocks and ignores and a child inherits."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+    if ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signum)) != 0:
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG) failed")
 
 
 def free_port(low=20000):
@@ -95,7 +109,9 @@ def reconnect_subscribers(master, missing, timeout=2.0):
 
 class IsolatedProcess:
     """``command`` run against the master at ``master_uri``, in a new process group, its output in
-    ``log_path``. Use as a context manager: leaving it interrupts the process (SIGINT, as Ctrl-C) and waits."""
+    ``log_path``. Use as a context manager (from the thread that lives as long as the process should: it
+    gets SIGINT when that thread ends, e.g. a runner SIGKILLed with the Ray worker that ran it): leaving it
+    interrupts the process (SIGINT, as Ctrl-C) and waits."""
 
     def __init__(self, command, log_path, master_uri):
         self.command, self.log_path, self.master_uri = list(command), log_path, master_uri
@@ -106,7 +122,8 @@ class IsolatedProcess:
         env.pop("ROS_IP", None)
         self._log = open(self.log_path, "w")
         self.process = subprocess.Popen(self.command, env=env, stdout=self._log, stderr=subprocess.STDOUT,
-                                        stdin=subprocess.DEVNULL, start_new_session=True)
+                                        stdin=subprocess.DEVNULL, start_new_session=True,
+                                        preexec_fn=lambda: signal_on_parent_death(signal.SIGINT))
         return self
 
     def alive(self):

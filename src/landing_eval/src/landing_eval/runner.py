@@ -6,6 +6,7 @@ import argparse
 import collections
 import json
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -345,6 +346,14 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     return result
 
 
+def stop_on_sigterm():
+    """SIGTERM (the benchmark's stop, or a dying Ray worker's death signal) unwinds like Ctrl-C, so the
+    launch and the recorder, each in a session of its own, are stopped instead of left running."""
+    def handler(signum, _frame):
+        raise KeyboardInterrupt("signal %s" % signal.Signals(signum).name)
+    signal.signal(signal.SIGTERM, handler)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description="Run one landing scenario headless; write result.json and flight.bag.")
     parser.add_argument("scenario", help="scenario YAML file (SPEC section 7)")
@@ -356,6 +365,7 @@ def main(argv=None):
                         help="realism profile of the simulated world (default: the scenario's, else realistic); "
                              "single keys the scenario overrides stay overridden")
     args = parser.parse_args(argv)
+    stop_on_sigterm()
     try:
         result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack,
                      supervisor=not args.no_supervisor, realism=args.realism)

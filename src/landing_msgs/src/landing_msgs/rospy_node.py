@@ -5,6 +5,12 @@
     ...
     spin()              # instead of rospy.spin()
 
+A node that works on a timer (supervisor, emergency, cmd_vel_mux) is a class whose constructor reads its
+parameters and whose ``tick()`` runs at its rate:
+
+    def main():
+        return run_node("name", NodeClass, startup_errors=(SettingsError,))   # NodeClass.spin: spin_at(rate, tick)
+
 - Signals: rospy's handler can deadlock mid-publish (see landing_msgs.shutdown); here a signal starts a
   thread that shuts rospy down.
 - Accept backlog: rospy's TCPROS server listens with a backlog of 5 and accepts in one thread. When a
@@ -58,3 +64,31 @@ def spin():
     _after_shutdown_flag(stopped.set)
     while not rospy.is_shutdown():
         stopped.wait(1.0)
+
+
+def spin_at(rate_hz, tick):
+    """Call ``tick()`` at ``rate_hz`` of ROS time (sim time under /use_sim_time) until rospy shuts down; not
+    before the clock runs (a scenario holds the physics at first). A jump back in time is logged, not fatal."""
+    rate = rospy.Rate(rate_hz)
+    while not rospy.is_shutdown():
+        if rospy.get_time() > 0.0:
+            tick()
+        try:
+            rate.sleep()
+        except rospy.ROSTimeMovedBackwardsException:
+            rospy.logwarn("%s: ROS time moved backwards; carrying on", rospy.get_name())
+        except rospy.ROSInterruptException:
+            break
+
+
+def run_node(name, make_node, startup_errors):
+    """main() of a node: init_node(name), ``node = make_node()``, ``node.spin()``; returns the exit status. A
+    startup error (one of ``startup_errors``: a missing or bad parameter) is logged as fatal and gives 2."""
+    init_node(name)
+    try:
+        node = make_node()
+    except startup_errors as err:
+        rospy.logfatal(str(err))
+        return 2
+    node.spin()
+    return 0

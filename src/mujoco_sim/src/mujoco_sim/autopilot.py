@@ -53,10 +53,6 @@ def quat_to_matrix(q):
         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def yaw_of(rotation):
-    return math.atan2(rotation[1, 0], rotation[0, 0])
-
-
 def wrap_angle(angle):
     return (angle + math.pi) % (2 * math.pi) - math.pi
 

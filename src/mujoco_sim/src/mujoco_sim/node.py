@@ -17,6 +17,7 @@ import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
+from landing_msgs.geometry import euler_from_quaternion
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
 from landing_msgs.rospy_node import init_node
 from nav_msgs.msg import Odometry
@@ -472,10 +473,7 @@ class SimNode:
     def _navdata_message(self, stamp):
         sim = self.sim
         _, quat = sim.drone_pose()
-        w, x, y, z = quat
-        roll = math.degrees(math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)))
-        pitch = math.degrees(math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x)))))
-        yaw = math.degrees(math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+        roll, pitch, yaw = (math.degrees(angle) for angle in euler_from_quaternion(*quat))
         vx, vy, vz = sim.flow_velocity()
         sonar = sim.sonar()
         state = NAVDATA_STATE[sim.autopilot.mode]

@@ -12,11 +12,12 @@ import os
 
 import numpy as np
 
-from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix, yaw_of
+from landing_msgs import camera_footprint
+from landing_msgs.geometry import yaw_from_quaternion
+
+from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix
 from .config import ConfigError
 from .environment import Battery, Wind, aerodynamic_force
-from landing_msgs import camera_footprint
-
 from .firmware import FirmwareEstimator
 from .realism import DelayLine, Dropouts, GaussMarkov, RandomWalk
 
@@ -632,7 +633,7 @@ class Simulator:
         sees, with flow_surface_coupling) with white noise."""
         _, quat = self.drone_pose()
         rotation = quat_to_matrix(quat)
-        yaw = yaw_of(rotation)
+        yaw = yaw_from_quaternion(*quat)
         c, s = math.cos(yaw), math.sin(yaw)
         if self.firmware is not None:
             vx, vy = self.firmware.velocity

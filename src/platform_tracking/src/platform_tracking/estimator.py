@@ -37,15 +37,12 @@ import dataclasses
 import math
 
 import numpy as np
+from landing_msgs.geometry import yaw_from_quaternion
 
 from .params import EstimatorParams
 
 HISTORY_SPAN = 1.5  # seconds of past estimates kept for late GPS fixes [s]
 PAD_MAX_AGE = 1.0   # a pad state older than this is not used to correct the flow [s]
-
-
-def yaw_from_quaternion(w, x, y, z):
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def heading_to_world(vx, vy, yaw):

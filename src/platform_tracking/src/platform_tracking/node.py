@@ -35,6 +35,7 @@ import threading
 import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped, Twist, Vector3Stamped
+from landing_msgs.geometry import yaw_from_quaternion
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
 from landing_msgs.rospy_node import init_node, spin
@@ -43,7 +44,7 @@ from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, String
 
 from .controller import DroneState, PadPrediction, TrackingController
-from .estimator import DroneEstimator, yaw_from_quaternion
+from .estimator import DroneEstimator
 from .flow_surface import FlowSurface
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
 from .state_machine import Inputs, State, TrackingStateMachine

@@ -1,0 +1,79 @@
+"""ray_scaling: the same sweep run locally and as Ray tasks on Ray nodes started on this machine, timed.
+
+    rosrun landing_eval ray_scaling scenarios/stress/short_sweep --out /tmp/scaling [--configs local,ray,ray1,ray1+1]
+
+Configurations: ``local`` (benchmark --jobs CPUS), ``ray`` (one Ray node with CPUS CPUs), ``rayA+B`` (a head
+with A CPUs and a second node, a separate ``ray start --address`` process, with B). Each is a whole
+``rosrun landing_eval benchmark`` command, timed from start to exit (connecting to Ray included), with its
+results in OUT/CONFIG. Prints a table: wall time, runs passed, and where the runs went. On one machine a
+second node adds no cores: ``ray1+1`` against ``ray1`` shows that tasks spread over the nodes and that a
+node's CPUs are used as they come, ``ray2+2`` that oversubscribing the cores does not help."""
+import argparse
+import collections
+import csv
+import os
+import subprocess
+import sys
+import time
+
+from .ray_local import RayNode
+
+
+def sweep(scenarios, out, extra):
+    start = time.monotonic()
+    with open(out + ".log", "w") as log:
+        code = subprocess.run(["rosrun", "landing_eval", "benchmark"] + scenarios + ["--out", out] + extra,
+                              stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL).returncode
+    wall = time.monotonic() - start
+    rows = []
+    if os.path.isfile(os.path.join(out, "results.csv")):
+        with open(os.path.join(out, "results.csv"), newline="") as stream:
+            rows = list(csv.DictReader(stream))
+    return code, wall, rows
+
+
+def run_config(config, scenarios, out_root, cpus):
+    out = os.path.join(out_root, config.replace("+", "_"))
+    if config == "local":
+        return sweep(scenarios, out, ["--jobs", str(cpus)])
+    sizes = [int(n) for n in config[3:].split("+")] if config[3:] else [cpus]
+    with RayNode(num_cpus=sizes[0]) as head:
+        nodes = [RayNode(num_cpus=n, address=head.address) for n in sizes[1:]]
+        try:
+            for node in nodes:
+                node.start()
+            return sweep(scenarios, out, ["--ray", head.address])
+        finally:
+            for node in nodes:
+                node.stop()
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("scenarios", nargs="+", help="scenario files or directories")
+    parser.add_argument("--out", required=True, help="output directory (a subdirectory per configuration)")
+    parser.add_argument("--cpus", type=int, default=2, help="CPUs of 'local' (--jobs) and of 'ray' [-]")
+    parser.add_argument("--configs", default="local,ray,ray1,ray1+1", help="comma-separated configurations")
+    args = parser.parse_args(argv)
+    configs = [c.strip() for c in args.configs.split(",") if c.strip()]
+    for config in configs:
+        if config not in ("local", "ray") and not (config.startswith("ray") and
+                                                    all(p.isdigit() for p in config[3:].split("+"))):
+            parser.error("unknown configuration %r (local, ray, rayA+B...)" % config)
+    os.makedirs(args.out, exist_ok=True)
+    lines = ["| configuration | wall [s] | passed | exit | runs per node |", "|---|---|---|---|---|"]
+    for config in configs:
+        code, wall, rows = run_config(config, args.scenarios, args.out, args.cpus)
+        per_node = collections.Counter(r.get("node") or "-" for r in rows)
+        label = "local --jobs %d" % args.cpus if config == "local" else \
+            "Ray, %s CPU" % (config[3:] or str(args.cpus)).replace("+", " + ")
+        lines.append("| %s | %.1f | %d/%d | %d | %s |" % (
+            label, wall, sum(r["passed"] == "True" for r in rows), len(rows), code,
+            ", ".join("%s: %d" % item for item in sorted(per_node.items()))))
+        print(lines[-1], flush=True)
+    print("\n".join(["", "%s on %d cores:" % (" ".join(args.scenarios), os.cpu_count())] + lines))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

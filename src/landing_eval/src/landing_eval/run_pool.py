@@ -1,0 +1,187 @@
+"""Where the benchmark's runs execute: local subprocesses (a thread pool of ``jobs``) or Ray tasks on a
+cluster whose machines all have the workspace built at the same path.
+
+Either way one run is ``execute_run(spec)``: ``python -m landing_eval.runner_cli`` in a subprocess under its
+own ROS master, on the machine that runs it. The pools yield ``(spec, outcome)`` as runs finish; the
+caller turns each outcome into a results row (benchmark.row_of)."""
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+from .isolated_ros import signal_on_parent_death
+
+# Environment a run needs from the machine that starts the sweep: the venv and the built workspace (the
+# same paths on every node). ROS_MASTER_URI, ROS_IP and ROS_HOSTNAME are not among them: each run has
+# its own master on its own node.
+FORWARDED_ENV = ("PATH", "PYTHONPATH", "LD_LIBRARY_PATH", "CMAKE_PREFIX_PATH", "PKG_CONFIG_PATH", "ROS_PACKAGE_PATH",
+                 "ROS_ROOT", "ROS_ETC_DIR", "ROS_DISTRO", "ROS_VERSION", "ROS_PYTHON_VERSION",
+                 "ROSLISP_PACKAGE_DIRECTORIES", "MUJOCO_GL", "LP_NUM_THREADS")
+STOP_GRACE_S = 30.0     # a run given SIGINT or SIGTERM has this long to stop its graph before SIGKILL [s]
+START_STOP_MARGIN_S = 120.0  # wall time a run may take beyond its flight's wall limit (start-up, shut-down) [s]
+RAY_MAX_RETRIES = 3     # a task whose worker or node died is run again, elsewhere if need be, this often
+
+
+def _prepare_child():
+    """preexec_fn of a run: SIGTERM when the process that started it dies (a killed Ray worker, a killed
+    benchmark), so no run goes on without anybody to read its result; the runner unwinds on SIGTERM and
+    stops its graph (which also stops by itself if the runner is SIGKILLed: Ray kills a dead worker's
+    children so)."""
+    signal_on_parent_death(signal.SIGTERM)
+
+
+def forwarded_environment():
+    return {key: os.environ[key] for key in FORWARDED_ENV if key in os.environ}
+
+
+def _clear(out_dir):
+    """An earlier attempt's directory (a run whose worker died, or an interrupted sweep) is moved aside and
+    removed, so nothing of it is mistaken for this run's output; a process of it that is still stopping
+    keeps writing into the moved copy."""
+    if os.path.lexists(out_dir):
+        stale = "%s.stale-%d-%d" % (out_dir, os.getpid(), int(time.time() * 1000))
+        os.rename(out_dir, stale)
+        shutil.rmtree(stale, ignore_errors=True)
+    os.makedirs(out_dir)
+
+
+class _Running:
+    """The run subprocesses of this process, so that an interrupted sweep can stop them."""
+    lock, processes = threading.Lock(), set()
+
+    @classmethod
+    def stop_all(cls):
+        with cls.lock:
+            processes = list(cls.processes)
+        for process in processes:
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + STOP_GRACE_S
+        for process in processes:
+            try:
+                process.wait(timeout=max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+
+
+def node_name():
+    """This machine, and the Ray node when inside a Ray worker (several nodes may share a machine)."""
+    name = socket.gethostname()
+    if "ray" in sys.modules:
+        import ray
+        if ray.is_initialized():
+            name += ":" + ray.get_runtime_context().get_node_id()[:8]
+    return name
+
+
+def execute_run(spec):
+    """One run of a scenario on this machine. ``spec``: ``python`` (interpreter of the workspace's venv),
+    ``file`` (scenario path) and ``scenario_text`` (its YAML, written beside the run's output, so that a node
+    need not have the file), ``out_dir``, ``log`` (path of the runner's output), ``wall_timeout`` (flight's
+    wall limit [s]) and ``env`` (environment overrides, or None). Returns ``{"returncode", "result",
+    "node", "failure"}``: ``result`` is result.json's content, or None with ``failure`` saying why."""
+    python = spec["python"]
+    if not os.access(python, os.X_OK):
+        raise RuntimeError("%s has no %s: every machine of the cluster needs the workspace built at the same path "
+                           "(make build)" % (socket.gethostname(), python))
+    out_dir = spec["out_dir"]
+    _clear(out_dir)
+    scenario_path = spec["file"]
+    if spec.get("scenario_text") is not None:
+        scenario_path = os.path.join(out_dir, "scenario.yaml")
+        with open(scenario_path, "w") as stream:
+            stream.write(spec["scenario_text"])
+    command = [python, "-m", "landing_eval.runner_cli", scenario_path, "--out", out_dir,
+               "--wall-timeout", str(spec["wall_timeout"])]
+    env = dict(os.environ, **spec["env"]) if spec.get("env") else None
+    outcome = {"returncode": None, "result": None, "node": node_name(), "failure": None}
+    with open(spec["log"], "w") as log:
+        process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env,
+                                   preexec_fn=_prepare_child)
+        with _Running.lock:
+            _Running.processes.add(process)
+        try:
+            outcome["returncode"] = process.wait(timeout=spec["wall_timeout"] + START_STOP_MARGIN_S)
+        except subprocess.TimeoutExpired:
+            process.send_signal(signal.SIGINT)
+            try:
+                process.wait(timeout=STOP_GRACE_S)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+            outcome["failure"] = "run_scenario did not finish within %.0f s" % (
+                spec["wall_timeout"] + START_STOP_MARGIN_S)
+            return outcome
+        finally:
+            with _Running.lock:
+                _Running.processes.discard(process)
+    result_file = os.path.join(out_dir, "result.json")
+    if outcome["returncode"] != 0 or not os.path.isfile(result_file):
+        outcome["failure"] = "run_scenario exited with %s; see %s" % (outcome["returncode"], spec["log"])
+        return outcome
+    with open(result_file) as stream:
+        outcome["result"] = json.load(stream)
+    return outcome
+
+
+def local_runs(specs, jobs):
+    """Yields (spec, outcome) as the runs finish, ``jobs`` at a time on this machine."""
+    import concurrent.futures
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs))
+    futures = {pool.submit(execute_run, spec): spec for spec in specs}
+    try:
+        for future in concurrent.futures.as_completed(futures):
+            yield futures[future], future.result()
+    finally:
+        for future in futures:
+            future.cancel()
+        _Running.stop_all()
+        pool.shutdown(wait=True)
+
+
+def ray_runs(specs, address, cpus_per_run, idle_timeout):
+    """Yields (spec, outcome) as Ray tasks finish: one task per run, ``cpus_per_run`` CPUs each, on any node of
+    the cluster at ``address`` ('auto': the one this machine belongs to). A task whose worker or node dies is
+    run again (up to RAY_MAX_RETRIES times, on any node); only its one returned result counts. Raises
+    TimeoutError when no task has finished for ``idle_timeout`` seconds."""
+    import logging
+
+    import ray
+    try:
+        ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR, configure_logging=True)
+    except (ConnectionError, RuntimeError, ValueError) as err:
+        raise ConnectionError("cannot connect to the Ray cluster at %s: %s (start it with 'ray start --head', "
+                              "see the README)" % (address, err)) from err
+    refs = {}
+    try:
+        task = ray.remote(execute_run).options(num_cpus=cpus_per_run, max_retries=RAY_MAX_RETRIES,
+                                               retry_exceptions=False)
+        refs = {task.remote(dict(spec, env=forwarded_environment())): spec for spec in specs}
+        pending = list(refs)
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1, timeout=idle_timeout)
+            if not done:
+                raise TimeoutError("no run finished on the Ray cluster for %.0f s (%d still pending); is it up? "
+                                   "('ray status')" % (idle_timeout, len(pending)))
+            for ref in done:
+                try:
+                    outcome = ray.get(ref)
+                except ray.exceptions.RayError as err:  # retries used up, or the run raised
+                    message = str(err).strip().splitlines()
+                    outcome = {"returncode": None, "result": None, "node": None,
+                               "failure": "Ray: %s" % (message[-1] if message else type(err).__name__)}
+                yield refs[ref], outcome
+    finally:
+        if ray.is_initialized():
+            for ref in refs:  # those still running when the sweep is interrupted
+                try:
+                    ray.cancel(ref, force=True)
+                except Exception:  # already finished, or the cluster is gone
+                    pass
+            ray.shutdown()

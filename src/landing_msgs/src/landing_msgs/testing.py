@@ -1,0 +1,35 @@
+"""Test tooling every package's tests share (rostests and pytest alike).
+
+    from landing_msgs.testing import wait_for
+    wait_for(lambda: messages, "a message on /topic", timeout=60)
+"""
+import sys
+import time
+
+
+def _ros_state():
+    """(shut down?, ROS time: sim time under /use_sim_time) of this process's rospy node, or (False, None)."""
+    rospy = sys.modules.get("rospy")
+    if rospy is None or not rospy.core.is_initialized():
+        return False, None
+    return rospy.is_shutdown(), rospy.get_time()
+
+
+def wait_for(condition, what, timeout, poll=0.02, process=None):
+    """Returns the first true value of ``condition()``, polled every ``poll`` wall seconds. Fails with an
+    AssertionError that names ``what``: after ``timeout`` wall seconds, as soon as this process's rospy node
+    shuts down, or as soon as ``process`` (a subprocess.Popen the condition depends on) has exited."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = condition()
+        if value:
+            return value
+        shut_down, sim_time = _ros_state()
+        at = "" if sim_time is None else " (ROS time %.2f)" % sim_time
+        if shut_down:
+            raise AssertionError("ROS shut down while waiting for %s%s" % (what, at))
+        if process is not None and process.poll() is not None:
+            raise AssertionError("%s exited (code %s) while waiting for %s" % (process.args, process.returncode, what))
+        if time.monotonic() > deadline:
+            raise AssertionError("timed out after %.0f s (wall) waiting for %s%s" % (timeout, what, at))
+        time.sleep(poll)
