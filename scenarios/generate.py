@@ -90,8 +90,10 @@ def suite():
         add("rendezvous_%s_%s_%gms" % (vehicle, path, speed), vehicle=vehicle, path=path, speed=speed, start=start,
             time_limit=180.0, description="drone starts 30 m away and must find the vehicle")
     # Adverse conditions and operator choices: every flag of the supervisor, with the expected outcome.
+    # The reported coordinates are the drone's own estimate: as good as its GPS, whose error drifts by a
+    # metre per axis in the realistic profile (two in harsh); 5 m is what a rescue needs.
     emergency = lambda condition: {"outcome": "emergency_landed", "no_pad_landing": True,  # noqa: E731
-                                   "emergency_position_within_m": 1.0,
+                                   "emergency_position_within_m": 5.0,
                                    "decisions_include": [{"condition": condition, "action": "emergency_landing"}]}
     stays = lambda condition, action: {"outcome": "timeout", "no_pad_landing": True,  # noqa: E731
                                        "decisions_include": [{"condition": condition, "action": action}]}

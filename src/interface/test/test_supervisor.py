@@ -225,7 +225,7 @@ def test_flag3_recheck_interval_and_count_are_settings():
     ({"drone_battery": 39.0}, "drone_battery_landing", "battery"),
     ({"camera_silence_s": 1.5}, "camera_missing", "sensor missing"),
     ({"imu_silence_s": 1.5}, "imu_missing", "sensor missing"),
-    ({"odometry_silence_s": 1.5}, "odometry_missing", "sensor missing"),
+    ({"odometry_silence_s": 8.5}, "odometry_missing", "sensor missing"),
     ({"sonar_silence_s": 1.5}, "sonar_missing", "sensor missing"),
 ])
 def test_no_go_during_the_landing_says_why_and_go_when_it_clears(flying, change, row, reason_text):

@@ -96,6 +96,8 @@ bool setParameter(FilterParameters& p, unsigned& seed, double& noise_std, double
     { "observation_std_floor", &p.observation_std_floor },
     { "observation_std_per_metre", &p.observation_std_per_metre },
     { "gps_observation_covariance", &p.gps_observation_covariance },
+    { "gps_offset_initial_std", &p.gps_offset_initial_std },
+    { "gps_offset_drift", &p.gps_offset_drift },
     { "gps_vision_timeout", &p.gps_vision_timeout },
     { "gps_pad_height", &p.gps_pad_height },
     { "initial_gps_height_std", &p.initial_gps_height_std },

@@ -34,6 +34,8 @@ std::map<std::string, double> filterDefaults()
     { "observation_std_floor", p.observation_std_floor },
     { "observation_std_per_metre", p.observation_std_per_metre },
     { "gps_observation_covariance", p.gps_observation_covariance },
+    { "gps_offset_initial_std", p.gps_offset_initial_std },
+    { "gps_offset_drift", p.gps_offset_drift },
     { "gps_vision_timeout", p.gps_vision_timeout },
     { "gps_pad_height", p.gps_pad_height },
     { "initial_gps_height_std", p.initial_gps_height_std },
@@ -50,9 +52,10 @@ std::map<std::string, double> filterDefaults()
   };
 }
 
-// Keys of the node itself (frames, output timing, the GPS antenna offset), not of the filter.
-const std::set<std::string> kNodeKeys = { "world_frame",  "time_step",        "path_time",
-                                          "pub_freq",     "gps_pad_offset_x", "gps_pad_offset_y" };
+// Keys of the node itself (frames, output timing, the GPS antenna offset, how late a measurement may be), not
+// of the filter.
+const std::set<std::string> kNodeKeys = { "world_frame",      "time_step",        "path_time",     "pub_freq",
+                                          "gps_pad_offset_x", "gps_pad_offset_y", "fusion_horizon" };
 }  // namespace
 
 TEST(KalmanConfig, EveryFilterParameterInTheYamlEqualsTheDefault)
