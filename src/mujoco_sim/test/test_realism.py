@@ -140,3 +140,15 @@ def test_dropouts_come_at_their_rate_and_last_their_duration():
     # Each outage of 3 s starts on average every 120 s (+3 s it lasts): 2.4 % of the time.
     assert down / span == pytest.approx(3.0 / 123.0, rel=0.2)
     assert not any(Dropouts(rng(), 0.0, 3.0).active(t) for t in range(100))
+
+
+def test_the_readme_table_of_the_profiles_is_the_one_sim_yaml_makes():
+    """The README's realism table is generated (`rosrun mujoco_sim realism_table --readme README.md`): a value
+    or a reason changed in config/sim.yaml must be written into it too."""
+    from mujoco_sim import realism_table
+    readme = os.path.join(PKG, "..", "..", "README.md")
+    text = open(readme).read()
+    block = text[text.index(realism_table.START) + len(realism_table.START):text.index(realism_table.END)]
+    assert block.strip() == realism_table.markdown(CONFIG).strip(), \
+        "README.md's realism table is stale: run `rosrun mujoco_sim realism_table --readme README.md`"
+    assert "| `camera_latency_s` | 0 | 0.1 | 0.2 |" in block
