@@ -161,11 +161,12 @@ class EstimatorNode:
         with self.lock:
             self._at(t)
             self.estimator.flow(t, msg.vx, msg.vy, msg.vz)
-            unseen = self.estimator.unseen_velocity[1]
+            unseen, weight = self.estimator.unseen_velocity[1], self.estimator.flow_weight
         if self.surface.enabled:
             correction = Vector3Stamped()
             correction.header.stamp, correction.header.frame_id = msg.header.stamp, self.params.frame_id
             correction.vector.x, correction.vector.y = float(unseen[0]), float(unseen[1])
+            correction.vector.z = float(weight)  # the weight itself: 0 the flow sees the ground, 1 the vehicle
             self.pub_unseen.publish(correction)
 
     def on_gps(self, msg):
@@ -249,7 +250,7 @@ class TrackingNode:
         self.lock = threading.Lock()
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
         self.estimate = None          # (stamp, DroneState without sonar)
-        self.unseen = None            # (stamp, world xy) of the pad's velocity the drone's flow does not see
+        self.unseen = None            # (stamp, world xy, weight) of the vehicle's velocity the flow does not see
         self.sonar = None             # median of the last three sonar ranges (a spurious echo is one of them), or None
         self.sonar_ranges = collections.deque(maxlen=3)
         self.navdata_state = None
@@ -296,7 +297,8 @@ class TrackingNode:
         if not finite(msg.vector.x, msg.vector.y):
             return warn_dropped("ardrone/flow_unseen_velocity", "non-finite value")
         with self.lock:
-            self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]))
+            self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]),
+                           float(msg.vector.z) if math.isfinite(msg.vector.z) else 0.0)
 
     def on_path(self, msg):
         if msg.header.frame_id not in WORLD_FRAMES:
@@ -381,11 +383,12 @@ class TrackingNode:
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
                 state = self.estimate[1]
                 drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
-            unseen = self.unseen[1] if self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE else None
+            fresh = self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE
+            unseen, flow_weight = (self.unseen[1], self.unseen[2]) if fresh else (None, 0.0)
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
                             force_land="force_land" in self.requests, landing_allowed=self.landing_allowed,
-                            vision_age=None if self.seen_at is None else t - self.seen_at)
+                            vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight)
             self.requests.clear()
         before = self.machine.state
         out = self.machine.step(inputs)

@@ -173,6 +173,10 @@ class TrackingParams:
     abort_to_gate: bool = spec(True)
     blind_height: float = spec(0.35, 0.0, 5.0, "m")
     land_ack_timeout: float = spec(1.0, 0.05, 30.0, "s")
+    blend_weight_low: float = spec(0.1, 0.0, 1.0, "-")
+    blend_weight_high: float = spec(0.9, 0.0, 1.0, "-")
+    blend_min_pad_speed: float = spec(4.0, 0.0, 50.0, "m/s")
+    blend_descent_rate: float = spec(0.8, 0.05, 3.0, "m/s")
 
     def check(self, source="tracking parameters"):
         """Relations between parameters that a single range cannot express."""
