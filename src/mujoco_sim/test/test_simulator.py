@@ -393,6 +393,9 @@ def test_the_realistic_camera_is_distorted_wider_rendered_and_its_brightness_wan
     assert image.shape == (240, 320, 3)
     assert sim.lens.render_fovy_deg > sim.camera_fovy  # barrel distortion: the corners see further out
     assert sim.camera_distortion()[0] == pytest.approx(-0.2)
+    # The sun (a light that travels with the drone) shines from where the seed put it, 1 m towards it.
+    assert sim.data.light_xdir[0] == pytest.approx(sim.sun_direction, abs=1e-6)
+    assert sim.data.light_xpos[0] - sim.drone_pose()[0] == pytest.approx(-sim.sun_direction, abs=1e-6)
     gains = [sim.exposure.gain(t) for t in np.arange(0.0, 300.0, 0.5)]
     assert 0.05 < np.std(np.log(gains)) < 0.3
     ideal = make_sim(realism="ideal")

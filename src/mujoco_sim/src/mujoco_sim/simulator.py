@@ -185,8 +185,11 @@ class Simulator:
         self.sun_direction = -towards_sun
         m, sun = self.model, self._mj.mj_name2id(self.model, self._mj.mjtObj.mjOBJ_LIGHT, "sun")
         if sun >= 0:
-            m.light_dir[sun] = self.sun_direction
-            m.light_pos[sun] = towards_sun  # 1 m back towards the sun: the drone is inside the shadow map's depth
+            # A light of mode 'track' is placed from light_dir0 and light_pos0 (its offset from the body), the
+            # others from light_dir and light_pos: set both. 1 m back towards the sun: the drone is inside the
+            # shadow map's depth.
+            m.light_dir[sun] = m.light_dir0[sun] = self.sun_direction
+            m.light_pos[sun] = m.light_pos0[sun] = towards_sun
             m.light_diffuse[sun] = r["sun_intensity"]
             m.light_castshadow[sun] = r["shadows"]
         m.vis.headlight.active = int(r["ambient_light"] > 0.0)
