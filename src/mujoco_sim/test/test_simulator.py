@@ -402,3 +402,19 @@ def test_the_realistic_camera_is_distorted_wider_rendered_and_its_brightness_wan
     run(ideal, 0.2)
     ideal.render_camera()
     assert ideal.lens.identity and ideal.exposure.gain(10.0) == 1.0
+
+
+def test_a_surface_step_under_the_sonar_moves_the_firmware_height_not_the_drone():
+    """Flying off a car's roof the sonar's surface drops 1.7 m: the firmware takes the new height, and its
+    altitude hold keeps the drone's altitude instead of diving after the old height above the surface."""
+    from mujoco_sim.firmware import FirmwareEstimator
+    sim = make_sim(realism="realistic")
+    fw = FirmwareEstimator(sim.cfg["firmware"])
+    steps = [fw.sonar(k * 0.04, 0.04, 2.2, 4.0) for k in range(10)]
+    assert not any(steps) and fw.height == pytest.approx(2.2, abs=0.01)
+    steps = [fw.sonar(0.4 + k * 0.04, 0.04, 3.9, 4.0) for k in range(10)]
+    assert sum(steps) == pytest.approx(1.7, abs=0.01) and steps[0] == 0.0  # an outlier at first, then a step
+    assert fw.height == pytest.approx(3.9, abs=0.01)
+    sim.autopilot.z_ref = 2.2
+    sim.autopilot.shift_altitude_reference(1.7)
+    assert sim.autopilot.z_ref == pytest.approx(3.9)

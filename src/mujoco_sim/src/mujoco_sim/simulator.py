@@ -371,7 +371,9 @@ class Simulator:
             schedule["sonar"] = now + period
             distance = self.sonar()
             height = (distance + FOOT_CLEARANCE) * max(0.5, rotation[2, 2]) if math.isfinite(distance) else None
-            fw.sonar(now, period, height, self.altimeter()[0])
+            step = fw.sonar(now, period, height, self.altimeter()[0])
+            if step:
+                self.autopilot.shift_altitude_reference(step)
         if now >= schedule["flow"]:
             period = 1.0 / self.cfg["firmware"]["flow_rate_hz"]
             schedule["flow"] = now + period
