@@ -9,13 +9,14 @@ So, with ``w`` that weight and ``v_pad`` the vehicle's velocity:
     navdata velocity = v_drone - w v_pad          (the estimator adds w v_pad back)
     the drone flies at = command + w v_pad         (the tracker takes w v_pad off its command)
 
-The estimator works ``w v_pad`` out and publishes it (ardrone/flow_unseen_velocity); the tracker takes off
-exactly that. Being the same, an error in it does not move the drone off the pad: the estimate then
-believes the drone flies at its command while it drifts by the error, the vision fixes (placed with the
-estimate) show the pad drifting the other way, and the prediction's velocity, the tracker's feed-forward,
-makes up for it. The weight comes from the drone's estimated pose, the predicted pad and the vehicle's
-top (a rectangle around the pad, config/flow_surface_<vehicle>.yaml): the stack knows its drone's
-firmware as a calibration would tell it, not from the simulator.
+The estimator works ``w`` and ``w v_pad`` out, the latter from the vehicle's own velocity report (never
+from the pad filter, whose fixes it places itself), and publishes both (ardrone/flow_unseen_velocity).
+The tracker scales its feed-forward (the predicted pad velocity) by 1 - w: at w = 1 its command is the
+correction alone, relative to the pad, and no error of any absolute velocity (the report's noise and
+delay, the estimate's) moves the drone off it. The weight comes from the drone's estimated pose (its
+height from the sonar), the predicted pad and the vehicle's top (a rectangle around the pad,
+config/flow_surface_<vehicle>.yaml): the stack knows its drone's firmware as a calibration would tell it,
+not from the simulator.
 """
 import math
 

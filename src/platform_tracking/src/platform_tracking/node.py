@@ -384,7 +384,7 @@ class TrackingNode:
                 state = self.estimate[1]
                 drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
             fresh = self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE
-            unseen, flow_weight = (self.unseen[1], self.unseen[2]) if fresh else (None, 0.0)
+            flow_weight = self.unseen[2] if fresh else 0.0
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
                             force_land="force_land" in self.requests, landing_allowed=self.landing_allowed,
@@ -397,7 +397,7 @@ class TrackingNode:
         if out.send_land:
             self.pub_land.publish(Empty())
         if out.command is not None:
-            command = self._firmware_command(out.command, drone, unseen)
+            command = self._firmware_command(out.command, drone, flow_weight, inputs.pad, t)
             twist = Twist()
             twist.linear.x, twist.linear.y, twist.linear.z = command.vx, command.vy, command.vz
             twist.angular.z = command.yaw_rate
@@ -411,12 +411,14 @@ class TrackingNode:
             self.pub_target.publish(target)
         self.lockstep.ack(now)
 
-    def _firmware_command(self, command, drone, unseen):
-        """The drone flies its command relative to what its flow sees: over the vehicle, take off the part of
-        the vehicle's velocity the flow does not see, as the estimator worked it out (flow_surface.py)."""
-        if drone is None or unseen is None or not unseen.any() or self.machine.state == State.LANDED:
+    def _firmware_command(self, command, drone, flow_weight, pad, t):
+        """The drone flies its command relative to what its flow sees (flow_surface.py): over the vehicle it
+        adds weight x the vehicle's velocity of its own. So the command's share of the pad's velocity, the
+        feed-forward, is taken off by that weight: at weight 1 the command is the correction alone, a
+        relative one (vision's error and damping), and no error of any absolute velocity enters it."""
+        if drone is None or pad is None or flow_weight <= 0.0 or self.machine.state == State.LANDED:
             return command
-        forward, left = TrackingController.to_heading_frame(unseen, drone.yaw)
+        forward, left = TrackingController.to_heading_frame(flow_weight * pad.velocity[:2], drone.yaw)
         return dataclasses.replace(command, vx=command.vx - forward, vy=command.vy - left)
 
     def spin(self):
