@@ -27,7 +27,6 @@ use platform_tracking/command "land" for the gated landing on the pad.
 Inputs with a non-finite value are dropped with a throttled warning naming the topic.
 """
 import collections
-import dataclasses
 import math
 import sys
 import threading
@@ -43,7 +42,7 @@ from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, String
 
-from .controller import DroneState, PadPrediction, TrackingController
+from .controller import DroneState, PadPrediction
 from .estimator import DroneEstimator
 from .flow_surface import FlowSurface
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
@@ -397,7 +396,7 @@ class TrackingNode:
         if out.send_land:
             self.pub_land.publish(Empty())
         if out.command is not None:
-            command = self._firmware_command(out.command, drone, flow_weight, inputs.pad, t)
+            command = out.command
             twist = Twist()
             twist.linear.x, twist.linear.y, twist.linear.z = command.vx, command.vy, command.vz
             twist.angular.z = command.yaw_rate
@@ -410,16 +409,6 @@ class TrackingNode:
             target.point.x, target.point.y, target.point.z = (float(v) for v in out.target)
             self.pub_target.publish(target)
         self.lockstep.ack(now)
-
-    def _firmware_command(self, command, drone, flow_weight, pad, t):
-        """The drone flies its command relative to what its flow sees (flow_surface.py): over the vehicle it
-        adds weight x the vehicle's velocity of its own. So the command's share of the pad's velocity, the
-        feed-forward, is taken off by that weight: at weight 1 the command is the correction alone, a
-        relative one (vision's error and damping), and no error of any absolute velocity enters it."""
-        if drone is None or pad is None or flow_weight <= 0.0 or self.machine.state == State.LANDED:
-            return command
-        forward, left = TrackingController.to_heading_frame(flow_weight * pad.velocity[:2], drone.yaw)
-        return dataclasses.replace(command, vx=command.vx - forward, vy=command.vy - left)
 
     def spin(self):
         wait_for_clock()

@@ -103,6 +103,7 @@ class TrackingStateMachine:
         self.p = params.check()
         self.logger = logger or (lambda line: None)
         self.controller = TrackingController(params)
+        self._flow_weight = 0.0  # of the current step: how much the drone's own velocity follows the vehicle
         self.state = State.LANDED
         self.entered = 0.0                       # time the current state was entered
         self.takeoff_pending = False
@@ -194,12 +195,13 @@ class TrackingStateMachine:
         return VelocityCommand(vx, vy, vz, 0.0)
 
     def _tracking_xy(self, t, drone, pad, accumulate=True):
-        return self.controller.world_velocity(t, drone, pad, accumulate=accumulate)
+        return self.controller.world_velocity(t, drone, pad, accumulate=accumulate, flow_weight=self._flow_weight)
 
     # ----- the step ------------------------------------------------------------------------------
     def step(self, inputs: Inputs) -> Outputs:
         self._out = Outputs(state=self.state)
         t = inputs.time
+        self._flow_weight = inputs.flow_weight
         if inputs.pad is not None:
             self.last_pad = inputs.pad
         if inputs.takeoff:
