@@ -58,10 +58,12 @@ struct PlaneSegment {
 };
 
 // Straight pieces of a closed outline that are away from the image border: the outline is cut into
-// runs between border points, each run into straight pieces by approxPolyDP, and a line is fitted on
-// the plane to each piece's middle (its ends round off at corners).
-std::vector<PlaneSegment> planeSegments(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& plane,
-                                        const cv::Size& size, const PadDetectorParams& params) {
+// runs between border points, each run into straight pieces by approxPolyDP (in ideal pixels, where a
+// straight edge is straight), and a line is fitted on the plane to each piece's middle (its ends round
+// off at corners). `outline` in image pixels (for the border), `ideal` and `plane` the same points.
+std::vector<PlaneSegment> planeSegments(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                                        const std::vector<cv::Point2f>& plane, const cv::Size& size,
+                                        const PadDetectorParams& params) {
   std::vector<PlaneSegment> segments;
   const int n = static_cast<int>(outline.size());
   int first_border = -1;
@@ -76,12 +78,11 @@ std::vector<PlaneSegment> planeSegments(const std::vector<cv::Point>& outline, c
       runs.back().push_back(i);
     }
   }
-  std::vector<cv::Point> run_points, vertices;
-  std::vector<cv::Point2f> piece;
+  std::vector<cv::Point2f> run_points, vertices, piece;
   for (const auto& run : runs) {
     if (run.size() < params.min_edge_length_px) continue;
     run_points.clear();
-    for (int i : run) run_points.push_back(outline[i]);
+    for (int i : run) run_points.push_back(ideal[i]);
     cv::approxPolyDP(run_points, vertices, 2.0, false);
     // approxPolyDP keeps a subset of the run's points in order: find their indices.
     std::vector<size_t> vertex_index;
@@ -256,10 +257,13 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
       return result;
     }
   }
+  frame_lens_ = lensOf(view);
   computeMasks(image, order);
   std::vector<std::vector<cv::Point>> outlines;
   cv::findContours(pad_mask_, outlines, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
   cv::findContours(strip_mask_, strip_outlines_, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  strip_ideal_.resize(strip_outlines_.size());
+  for (size_t i = 0; i < strip_outlines_.size(); ++i) toIdeal(strip_outlines_[i], strip_ideal_[i]);
 
   result.reason = "no red region";
   double rejected_area = 0.0;
@@ -267,7 +271,8 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
   for (const auto& outline : outlines) {
     const double area = cv::contourArea(outline);
     if (area < params_.min_area_px) continue;
-    Candidate candidate = evaluate(outline, size, view);
+    toIdeal(outline, ideal_);
+    Candidate candidate = evaluate(outline, ideal_, size, view);
     const Detection& d = candidate.detection;
     if (candidate.ok) {
       if (!result.found || d.quality > result.quality) result = d;
@@ -299,18 +304,34 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
   return result;
 }
 
-PadDetector::Candidate PadDetector::evaluate(const std::vector<cv::Point>& outline, const cv::Size& size,
+const LensUndistortion* PadDetector::lensOf(const PlaneView* view) const {
+  if (!view || !view->intrinsics().distorted()) return nullptr;
+  if (!lens_ || lens_->intrinsics() != view->intrinsics()) lens_ = std::make_shared<const LensUndistortion>(view->intrinsics());
+  return lens_.get();
+}
+
+void PadDetector::toIdeal(const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& ideal) const {
+  if (frame_lens_) {
+    frame_lens_->undistort(pixels, ideal);
+  } else {
+    ideal.resize(pixels.size());
+    for (size_t i = 0; i < pixels.size(); ++i) ideal[i] = cv::Point2f(float(pixels[i].x), float(pixels[i].y));
+  }
+}
+
+PadDetector::Candidate PadDetector::evaluate(const std::vector<cv::Point>& outline,
+                                             const std::vector<cv::Point2f>& ideal, const cv::Size& size,
                                              const PlaneView* view) const {
   Candidate candidate;
   const bool touches_border = std::any_of(outline.begin(), outline.end(), [&](const cv::Point& p) {
     return onBorder(p, size, params_.border_margin_px);
   });
   if (!touches_border) {
-    candidate.ok = evaluateWhole(outline, view, candidate);
+    candidate.ok = evaluateWhole(outline, ideal, view, candidate);
   } else if (!view) {
     candidate.detection.reason = "pad cut by the image border and no camera geometry to complete it";
   } else {
-    candidate.ok = evaluatePartial(outline, size, *view, candidate);
+    candidate.ok = evaluatePartial(outline, ideal, size, *view, candidate);
   }
   if (candidate.ok) {
     candidate.detection.found = true;
@@ -319,33 +340,33 @@ PadDetector::Candidate PadDetector::evaluate(const std::vector<cv::Point>& outli
   return candidate;
 }
 
-const std::vector<cv::Point>* PadDetector::findStrip(const std::vector<cv::Point>& outline) const {
-  const std::vector<cv::Point>* best = nullptr;
+int PadDetector::findStrip(const std::vector<cv::Point>& outline) const {
+  int best = -1;
   double best_area = params_.min_strip_area_px;
-  for (const auto& strip : strip_outlines_) {
-    const cv::Moments m = cv::moments(strip);
+  for (size_t i = 0; i < strip_outlines_.size(); ++i) {
+    const cv::Moments m = cv::moments(strip_outlines_[i]);
     if (m.m00 < best_area) continue;
     const cv::Point2f centroid(float(m.m10 / m.m00), float(m.m01 / m.m00));
     if (cv::pointPolygonTest(outline, centroid, false) < 0) continue;
-    best = &strip;
+    best = int(i);
     best_area = m.m00;
   }
   return best;
 }
 
-bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const PlaneView* view,
-                                Candidate& candidate) const {
+bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                                const PlaneView* view, Candidate& candidate) const {
   const auto& p = params_;
   Detection& d = candidate.detection;
-  const double area = cv::contourArea(outline);
-  std::vector<cv::Point> hull;
-  cv::convexHull(outline, hull);
+  const double area = cv::contourArea(ideal);
+  std::vector<cv::Point2f> hull;
+  cv::convexHull(ideal, hull);
   const double solidity = area / std::max(cv::contourArea(hull), 1e-9);
   if (solidity < p.min_solidity) {
     d.reason = format("red region not convex (solidity %.2f < %.2f)", solidity, p.min_solidity);
     return false;
   }
-  std::vector<cv::Point> quad;
+  std::vector<cv::Point2f> quad;
   cv::approxPolyDP(hull, quad, p.approx_epsilon * cv::arcLength(hull, true), true);
   if (quad.size() != 4 || !cv::isContourConvex(quad)) {
     d.reason = format("red region has %d corners, not 4", int(quad.size()));
@@ -361,7 +382,7 @@ bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const Pla
     const cv::Point2d dir = side / std::max(length, 1e-9);
     const double max_distance = std::max(2.0, 0.05 * length);
     support.clear();
-    for (const auto& q : outline) {
+    for (const auto& q : ideal) {
       const cv::Point2d w = cv::Point2d(q) - a;
       const double t = w.dot(dir) / length;
       if (t > 0.15 && t < 0.85 && std::abs(w.x * dir.y - w.y * dir.x) <= max_distance) support.emplace_back(q);
@@ -436,21 +457,21 @@ bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const Pla
   const double solidity_term = (solidity - p.min_solidity) / std::max(1.0 - p.min_solidity, 1e-9);
   d.quality = clamp01(0.4 + 0.6 * std::min({clamp01(size_term), clamp01(shape_term), clamp01(solidity_term)}));
 
-  if (const auto* strip = findStrip(outline)) {
-    const cv::Moments m = cv::moments(*strip);
+  if (const int strip = findStrip(outline); strip >= 0) {
+    const cv::Moments m = cv::moments(strip_ideal_[strip]);
     d.strip_found = true;
     d.strip_centre_px = cv::Point2d(m.m10 / m.m00, m.m01 / m.m00);
   }
   return true;
 }
 
-bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const cv::Size& size,
-                                  const PlaneView& view, Candidate& candidate) const {
+bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                                  const cv::Size& size, const PlaneView& view, Candidate& candidate) const {
   const auto& p = params_;
   const PadModel& pad = p.pad;
   Detection& d = candidate.detection;
   d.partial = true;
-  auto toPlane = [&](const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& plane, Eigen::Vector2d& centroid) {
+  auto toPlane = [&](const std::vector<cv::Point2f>& pixels, std::vector<cv::Point2f>& plane, Eigen::Vector2d& centroid) {
     plane.clear();
     plane.reserve(pixels.size());
     for (const auto& q : pixels) {
@@ -465,14 +486,15 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const c
   };
   std::vector<cv::Point2f> pad_plane, strip_plane;
   Eigen::Vector2d pad_centroid, strip_centroid;
-  if (!toPlane(outline, pad_plane, pad_centroid)) {
+  if (!toPlane(ideal, pad_plane, pad_centroid)) {
     d.reason = "red region reaches above the horizon";
     return false;
   }
-  std::vector<PlaneSegment> pad_segments = planeSegments(outline, pad_plane, size, p);
+  std::vector<PlaneSegment> pad_segments = planeSegments(outline, ideal, pad_plane, size, p);
   std::vector<PlaneSegment> strip_segments;  // filled below when the strip is in view
-  const std::vector<cv::Point>* strip = findStrip(outline);
-  if (strip && toPlane(*strip, strip_plane, strip_centroid)) strip_segments = planeSegments(*strip, strip_plane, size, p);
+  const int strip = findStrip(outline);
+  if (strip >= 0 && toPlane(strip_ideal_[strip], strip_plane, strip_centroid))
+    strip_segments = planeSegments(strip_outlines_[strip], strip_ideal_[strip], strip_plane, size, p);
   if (pad_segments.empty() && strip_segments.empty()) {
     d.reason = "pad cut by the image border with no straight edge in view";
     return false;
@@ -685,7 +707,8 @@ bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines
     }
     // Corners of the marker's image (a small square: the rotated bounding box is close enough), on the plane.
     cv::Point2f box[4];
-    cv::minAreaRect(blob).points(box);
+    toIdeal(blob, ideal_);
+    cv::minAreaRect(ideal_).points(box);
     std::array<Eigen::Vector2d, 4> corners;
     bool on_plane = true;
     for (int k = 0; k < 4 && on_plane; ++k) {

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,8 @@ struct PadDetectorParams {
   double marker_min_surround = 0.6;      // share of red in a band around a white blob for it to be the marker
 };
 
+// Pixel positions are ideal (undistorted pinhole) pixels of the camera's K, except `outline`, which is in the
+// image as it came (to draw on it). Without lens distortion the two are the same.
 struct Detection {
   bool found = false;
   std::string reason;               // why nothing was found (the best candidate's rejection)
@@ -77,7 +80,7 @@ struct Detection {
   double expected_side_px = 0.0;    // pad side expected from the camera height, 0 when unknown [px]
   double quality = 0.0;             // 0..1: shape, size and fit agreement
   double optical_axis_margin_px = 0.0;  // signed distance of the principal point to the pad outline (+ inside)
-  std::vector<cv::Point> outline;   // pad outline in the image
+  std::vector<cv::Point> outline;   // pad outline in the image (image pixels, not undistorted)
 };
 
 // Not thread-safe: keeps its work images between calls (one detector per thread).
@@ -88,9 +91,10 @@ class PadDetector {
   // Empty when the parameters make sense, else the first problem, naming the parameter.
   static std::string validate(const PadDetectorParams& params);
 
-  // image: 8-bit, 3 channels, in `order`. view: camera intrinsics, attitude and height above the pad
-  // plane; without it, the size cannot be checked against the height and a pad cut by the image
-  // border is rejected (its centre cannot be completed without metric scale).
+  // image: 8-bit, 3 channels, in `order`. view: camera intrinsics (with the lens distortion: the outlines
+  // are undistorted point by point), attitude and height above the pad plane; without it, the size cannot
+  // be checked against the height and a pad cut by the image border is rejected (its centre cannot be
+  // completed without metric scale).
   Detection detect(const cv::Mat& image, ColorOrder order, const PlaneView* view = nullptr) const;
 
   const PadDetectorParams& params() const { return params_; }
@@ -103,11 +107,19 @@ class PadDetector {
   void computeMasks(const cv::Mat& image, ColorOrder order) const;
   // Share of red pixels in a band around a blob (clipped by the image border) [0..1].
   double redShareAround(const std::vector<cv::Point>& blob, const cv::Size& size) const;
-  Candidate evaluate(const std::vector<cv::Point>& outline, const cv::Size& size, const PlaneView* view) const;
-  bool evaluateWhole(const std::vector<cv::Point>& outline, const PlaneView* view, Candidate& candidate) const;
-  bool evaluatePartial(const std::vector<cv::Point>& outline, const cv::Size& size, const PlaneView& view,
-                       Candidate& candidate) const;
-  const std::vector<cv::Point>* findStrip(const std::vector<cv::Point>& outline) const;
+  // The lens of `view` (built on first use and kept), or null for a perfect lens or no view.
+  const LensUndistortion* lensOf(const PlaneView* view) const;
+  // Image points -> ideal pixels.
+  void toIdeal(const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& ideal) const;
+  // `outline` in image pixels, `ideal` the same points undistorted.
+  Candidate evaluate(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal, const cv::Size& size,
+                     const PlaneView* view) const;
+  bool evaluateWhole(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                     const PlaneView* view, Candidate& candidate) const;
+  bool evaluatePartial(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                       const cv::Size& size, const PlaneView& view, Candidate& candidate) const;
+  // Index in strip_outlines_ of the largest strip inside `outline`, or -1.
+  int findStrip(const std::vector<cv::Point>& outline) const;
   // The centre marker (a white blob of computeMasks) inside one of the red `outlines`; false (with
   // d.reason) when none qualifies.
   bool findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size, const PlaneView& view,
@@ -117,6 +129,10 @@ class PadDetector {
   cv::Mat kernel_;
   mutable cv::Mat hsv_, planes_[3], not_red_hue_, red_colour_, bright_, pad_mask_, strip_mask_, marker_mask_;
   mutable std::vector<std::vector<cv::Point>> strip_outlines_, white_blobs_;
+  mutable std::vector<std::vector<cv::Point2f>> strip_ideal_;  // strip_outlines_ undistorted
+  mutable std::vector<cv::Point2f> ideal_;                     // work buffer
+  mutable std::shared_ptr<const LensUndistortion> lens_;      // of the last distorted camera seen
+  mutable const LensUndistortion* frame_lens_ = nullptr;       // of the frame in work (null: no distortion)
   mutable std::vector<double> white_blob_red_share_;  // per white blob, redShareAround
 };
 
