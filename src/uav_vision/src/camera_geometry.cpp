@@ -49,8 +49,7 @@ void LensUndistortion::undistort(const std::vector<cv::Point>& pixels, std::vect
   for (size_t i = 0; i < pixels.size(); ++i) ideal[i] = undistort(pixels[i]);
 }
 
-cv::Point2d LensUndistortion::distort(const cv::Point2d& ideal) const {
-  const auto& k = intrinsics_;
+cv::Point2d distortPixel(const CameraIntrinsics& k, const cv::Point2d& ideal) {
   const auto& [k1, k2, p1, p2, k3] = k.distortion;
   const double x = (ideal.x - k.cx) / k.fx, y = (ideal.y - k.cy) / k.fy;
   const double r2 = x * x + y * y;

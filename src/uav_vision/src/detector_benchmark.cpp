@@ -140,13 +140,14 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "detector_benchmark: cannot write %s\n", results_path.c_str());
       return 2;
     }
-    std::fprintf(results, "image,found,kind,error_m,height_source,camera_height_estimate,cpu_us,reason\n");
+    std::fprintf(results,
+                 "image,found,kind,path,error_m,image_error_m,height_source,camera_height_estimate,cpu_us,reason\n");
   }
 
   std::vector<double> observe_us, detect_us, remap_us;
   int whole = 0, whole_found = 0, partial = 0, partial_found = 0, none = 0, false_detections = 0;
   std::map<std::string, ErrorStats> errors;
-  ErrorStats all_errors;
+  ErrorStats all_errors, image_errors;
   struct Miss {
     double error;  // +inf: not found
     std::string line;
@@ -172,12 +173,18 @@ int main(int argc, char** argv) {
       const auto& localizer = localizerFor(f);
       double t0 = threadCpuMicros();
       const uav_vision::PadObservation o = localizer.observe(image, uav_vision::ColorOrder::kRgb, f.intrinsics,
-                                                             f.imu_attitude, sonar_range, f.baro_altitude);
+                                                             f.imu_attitude, sonar_range, f.baro_altitude,
+                                                             0.5 * f.sonar_field_of_view);
       observe_us.push_back(threadCpuMicros() - t0);
       const uav_vision::PlaneView view(f.intrinsics, mount, f.attitude, f.camera_height);
       t0 = threadCpuMicros();
       detector.detect(image, uav_vision::ColorOrder::kRgb, &view);
       detect_us.push_back(threadCpuMicros() - t0);
+      // The image's part of the error: the same frame with the true camera height and attitude.
+      const uav_vision::PadObservation truth_fed =
+          pass == 0 ? localizer.observeAtHeight(image, uav_vision::ColorOrder::kRgb, f.intrinsics, f.attitude,
+                                                f.camera_height)
+                    : uav_vision::PadObservation();
       if (f.intrinsics.distorted()) {
         if (remap_camera != f.intrinsics) {
           const auto& k = f.intrinsics;
@@ -208,6 +215,8 @@ int main(int argc, char** argv) {
         errors[heightBand(f.camera_height)].errors.push_back(error);
         all_errors.errors.push_back(error);
       }
+      const double image_error = truth_fed.found ? (truth_fed.centre_in_body - f.pad_in_body).head<2>().norm() : NAN;
+      if (truth_fed.found && f.padInView() && image_error <= kFalseDistance) image_errors.errors.push_back(image_error);
       char line[512];
       std::snprintf(line, sizeof(line), "%s (%s, %s h=%.2f shadow=%.2f blur=%.1f px gain=%.2f false target=%.2f): %s",
                     f.image.c_str(), kind, f.profile.c_str(), f.camera_height, f.pad_shadow_share, f.blur_px,
@@ -216,8 +225,9 @@ int main(int argc, char** argv) {
       if ((o.found && !correct) || (!o.found && f.wholePadInView()))
         misses.push_back({o.found ? error : INFINITY, line});
       if (results)
-        std::fprintf(results, "%s,%d,%s,%.4f,%s,%.4f,%.1f,\"%s\"\n", f.image.c_str(), o.found, kind,
-                     o.found ? error : NAN, uav_vision::toString(o.height.source), o.height.camera_height,
+        std::fprintf(results, "%s,%d,%s,%s,%.4f,%.4f,%s,%.4f,%.1f,\"%s\"\n", f.image.c_str(), o.found, kind,
+                     !o.found ? "" : o.detection.marker ? "marker" : o.detection.partial ? "partial" : "whole",
+                     o.found ? error : NAN, image_error, uav_vision::toString(o.height.source), o.height.camera_height,
                      observe_us.back(), o.reason.c_str());
     }
   }
@@ -233,6 +243,8 @@ int main(int argc, char** argv) {
               100.0 * false_detections / total, false_detections, total, none);
   all_errors.print("centre error, all");
   for (const auto& [band, stats] : errors) stats.print(band.c_str());
+  image_errors.print("the image's part");
+  std::printf("    (the same frames with the true camera height and attitude instead of the sensors')\n");
   std::stable_sort(misses.begin(), misses.end(), [](const Miss& a, const Miss& b) { return a.error > b.error; });
   if (!misses.empty() && worst_count > 0) {
     std::printf("  false detections first, then missed whole pads (%zu in all):\n", misses.size());

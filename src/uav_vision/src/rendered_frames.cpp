@@ -73,6 +73,7 @@ std::vector<RenderedFrame> loadRenderedFrames(const std::string& dir) {
     f.sonar_range = num("sonar_range");
     f.sonar_range_before = num("sonar_range_before");
     f.sonar_range_after = num("sonar_range_after");
+    f.sonar_field_of_view = num("sonar_field_of_view");
     f.baro_altitude = num("baro_altitude");
     f.visible_pad_share = num("visible_pad_share");
     f.visible_pad_corners = int(num("visible_pad_corners"));

@@ -137,10 +137,13 @@ TEST(PadDetector, RandomLowViewsNeverGiveAWrongCentre) {
         attitudeFromRpy(tilt * std::cos(direction), tilt * std::sin(direction), rng.uniform(-M_PI, M_PI));
     const Eigen::Vector2d offset(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8));
     const Scene s = makeScene(height, offset, rng.uniform(-M_PI, M_PI), attitude);
-    int corners_in_view = 0;  // at least 10 px inside the image: a corner on the border is not enough
+    // At least 15 px inside the image: a corner on the border is not enough, nor a sliver of red around a
+    // corner near it (a few hundredths of a square metre, as a corner of the red false target beside the
+    // vehicle shows; the detector does not take a corner alone for the pad below min_corner_image_share).
+    int corners_in_view = 0;
     for (const auto& corner : rectangleOnPlane(offset, 1.0, 1.0, s.pad_yaw)) {
       const auto px = s.view.planeToPixel(corner);
-      corners_in_view += px && px->x > 10 && px->y > 10 && px->x < 309 && px->y < 229;
+      corners_in_view += px && px->x > 15 && px->y > 15 && px->x < 304 && px->y < 224;
     }
     const Detection d = detector.detect(s.image, ColorOrder::kBgr, &s.view);
     with_corner += corners_in_view > 0;
@@ -305,9 +308,8 @@ TEST(PadDetector, ParametersAreValidated) {
   p.size_tolerance = 2.0;
   EXPECT_NE(PadDetector::validate(p).find("size_tolerance"), std::string::npos);
   p = PadDetectorParams();
-  p.green_hue_min = 90;
-  p.green_hue_max = 80;
-  EXPECT_NE(PadDetector::validate(p).find("green_hue"), std::string::npos);
+  p.green_margin_min = 0;
+  EXPECT_NE(PadDetector::validate(p).find("green_margin_min"), std::string::npos);
 }
 
 // ----- localizer: height from the sensors, and which surface the sonar hits -----------------------

@@ -29,7 +29,7 @@ TEST(ReadingHistory, TheMedianDropsASpuriousEcho) {
   history.add(0.80, 0.3);  // an early echo (rotor noise)
   for (int i = 21; i <= 25; ++i) history.add(i * 0.04, 2.0 - 0.5 * i * 0.04);
   EXPECT_NEAR(history.nearest(0.80, 0.2), 0.3, 1e-12);             // the nearest alone is the outlier
-  EXPECT_NEAR(history.medianNear(0.80, 0.2), 2.0 - 0.5 * 0.76, 1e-12);  // the median of 0.76, 0.8, 0.84
+  EXPECT_NEAR(history.medianNear(0.80, 0.2), 2.0 - 0.5 * 0.84, 1e-12);  // of 0.76, 0.8, 0.84: a neighbour
   history.add(1.04, INFINITY);  // no echo at all: the median of 0.96, 1.0 and that
   EXPECT_NEAR(history.medianNear(1.04, 0.2), 2.0 - 0.5 * 0.96, 1e-12);
 }

@@ -26,6 +26,9 @@ struct CameraIntrinsics {
   bool operator!=(const CameraIntrinsics& other) const { return !(*this == other); }
 };
 
+// Image pixel of an ideal pixel: the lens model forwards (e.g. to draw a detection on the image).
+cv::Point2d distortPixel(const CameraIntrinsics& intrinsics, const cv::Point2d& ideal);
+
 // Where the lens put each pixel: the image pixel <-> the pixel of the ideal pinhole image with the same K
 // ("undistorted" or "ideal" pixels; PlaneView works in those). Only the points that matter are moved, not
 // the image: a lookup table of every pixel's ideal position, computed once per camera (about 20 ms), makes
@@ -39,8 +42,7 @@ class LensUndistortion {
   // Ideal pixel of an image pixel (inside the image: the caller's contour points are).
   const cv::Point2f& undistort(const cv::Point& pixel) const { return table_[pixel.y * intrinsics_.width + pixel.x]; }
   void undistort(const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& ideal) const;
-  // Image pixel of an ideal pixel (the lens model forwards, e.g. to draw a detection on the image).
-  cv::Point2d distort(const cv::Point2d& ideal) const;
+  cv::Point2d distort(const cv::Point2d& ideal) const { return distortPixel(intrinsics_, ideal); }
 
  private:
   CameraIntrinsics intrinsics_;

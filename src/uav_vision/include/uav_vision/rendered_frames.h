@@ -22,6 +22,7 @@ struct RenderedFrame {
   Eigen::Quaterniond attitude, imu_attitude;                     // true, and as the IMU reported it
   double tilt_deg = 0, baro_altitude = 0;
   double sonar_range = 0, sonar_range_before = 0, sonar_range_after = 0;  // at the frame, 40 ms before, after
+  double sonar_field_of_view = 0;                                // the beam's full width [rad]
   double visible_pad_share = 0;                                  // of the pad's area in the image [0..1]
   int visible_pad_corners = 0, strip_corners_in_view = 0, marker_corners_in_view = 0;
   double pad_shadow_share = 0;         // of the pad's area in view and in shadow [0..1]

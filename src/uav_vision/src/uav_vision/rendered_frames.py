@@ -36,7 +36,7 @@ TRUTH_COLUMNS = [
     "pad_base_x", "pad_base_y", "pad_base_z", "pad_world_x", "pad_world_y", "pad_world_z",
     "pad_camera_x", "pad_camera_y", "pad_camera_z", "strip_base_x", "strip_base_y", "strip_base_z",
     "qw", "qx", "qy", "qz", "imu_qw", "imu_qx", "imu_qy", "imu_qz", "tilt_deg",
-    "sonar_range", "sonar_range_before", "sonar_range_after", "baro_altitude",
+    "sonar_range", "sonar_range_before", "sonar_range_after", "sonar_field_of_view", "baro_altitude",
     "visible_pad_share", "visible_pad_corners", "strip_corners_in_view", "marker_corners_in_view",
     "pad_shadow_share", "false_target_share", "blur_px", "exposure_gain", "sun_elevation_deg",
     "pixel_noise_std_omitted",
@@ -243,6 +243,8 @@ class FrameRenderer:
             "imu_qw": imu_quat[0], "imu_qx": imu_quat[1], "imu_qy": imu_quat[2], "imu_qz": imu_quat[3],
             "tilt_deg": math.degrees(math.hypot(view.roll, view.pitch)),  # as drawn: direction and amount
             "sonar_range": sonars[1], "sonar_range_before": sonars[0], "sonar_range_after": sonars[2],
+            # The beam the sonar's echoes come from, as sensor_msgs/Range field_of_view.
+            "sonar_field_of_view": 2.0 * math.radians(sim.realism["sonar_beam_half_angle_deg"]),
             "baro_altitude": altitude,
             "visible_pad_share": float(np.mean(pad_grid_visible)),
             "visible_pad_corners": int(np.sum(self._inside(self._project(pad_corners, camera, cam_rot_world)))),
