@@ -73,8 +73,113 @@ def render_ideal(out):
     return rows
 
 
+def offset_for_pixel(u, v, height, yaw=0.0, intrinsics=(256.0, 159.5, 119.5)):
+    """Camera offset from the pad (world, horizontal) that puts the pad centre near pixel (u, v) of the
+    ideal image of a level camera with heading ``yaw``: image right is the drone's right, image up its
+    forward (docs/conventions.md)."""
+    f, cx, cy = intrinsics
+    forward, right = -(v - cy) / f * height, (u - cx) / f * height  # pad from the camera, body axes
+    c, s = math.cos(yaw), math.sin(yaw)
+    pad_x, pad_y = c * forward + s * right, s * forward - c * right  # body (forward, left=-right) -> world
+    return (-pad_x, -pad_y)
+
+
+def shadow_view(renderer, arguments):
+    """View arguments with ``jitter`` replaced: the camera where the drone's shadow falls on the pad, ``jitter``
+    [m] from its centre, the drone tilted (as when flying towards it) to bring the pad into view."""
+    arguments = dict(arguments)
+    sun = renderer.towards_sun
+    offset = np.asarray(arguments.pop("jitter")) + sun[:2] / sun[2] * (arguments["camera_height"] + 0.035)
+    towards_pad = -offset / np.linalg.norm(offset)
+    yaw, tilt = arguments.get("yaw", 0.0), math.radians(arguments.pop("tilt_towards_pad", 12.0))
+    c, s = math.cos(yaw), math.sin(yaw)
+    forward, left = c * towards_pad[0] + s * towards_pad[1], -s * towards_pad[0] + c * towards_pad[1]
+    # Pitching forward (negative pitch) and rolling left (positive roll) turn the camera that way.
+    arguments.update(camera_offset=tuple(offset), pitch=-tilt * forward, roll=tilt * left)
+    return arguments
+
+
+# What the realistic set shows, frame by frame: (label, renderer key, view arguments). Renderer keys:
+# (vehicle, profile, seed, overrides), one renderer per seed; a high sun (within the realistic profile's range) puts the drone's
+# shadow in the camera's view of the pad. Labels: shadow, blur, dark, bright, corner (the pad near an
+# image corner, where the lens bends it most), false (the red false target in view), none (no pad in
+# view), low (pad cut by the border), close (the marker alone), car, harsh.
+SUMMIT = ("summit_xl", "realistic", 101, {})
+SUMMIT_2 = ("summit_xl", "realistic", 102, {})
+HIGH_SUN = ("summit_xl", "realistic", 103, {"sun_elevation_deg": 63.0, "sun_elevation_spread_deg": 0.0})
+HIGH_SUN_2 = ("summit_xl", "realistic", 104, {"sun_elevation_deg": 60.0, "sun_elevation_spread_deg": 0.0})
+CAR = ("car", "realistic", 105, {})
+HARSH = ("summit_xl", "harsh", 106, {"sun_elevation_deg": 45.0, "sun_elevation_spread_deg": 0.0})
+DRIFT = dict(relative_velocity=(0.4, -0.2, -0.1), body_rates=(0.1, -0.15, 0.05))  # an ordinary approach
+FAST = dict(relative_velocity=(2.0, 1.0, -0.3), body_rates=(0.8, -0.6, 0.3))     # a hard manoeuvre: blur
+REALISTIC = [
+    ("whole", SUMMIT, dict(camera_offset=(0.3, -0.2), camera_height=2.0, roll=0.05, pitch=-0.08, yaw=0.4, **DRIFT)),
+    ("whole", SUMMIT, dict(camera_offset=(-0.5, 0.4), camera_height=3.0, roll=-0.1, pitch=0.05, yaw=2.1, **DRIFT)),
+    ("whole", SUMMIT, dict(camera_offset=(0.2, 0.6), camera_height=4.0, roll=0.12, pitch=0.1, yaw=-1.2, **DRIFT)),
+    ("whole", SUMMIT_2, dict(camera_offset=(0.0, 0.3), camera_height=1.5, roll=0.0, pitch=0.1, yaw=-2.6, **DRIFT)),
+    ("corner", SUMMIT, dict(camera_offset=offset_for_pixel(262, 28, 3.0), camera_height=3.0, **DRIFT)),
+    ("corner", SUMMIT_2, dict(camera_offset=offset_for_pixel(55, 200, 3.5, yaw=1.0), camera_height=3.5, yaw=1.0)),
+    ("corner", SUMMIT_2, dict(camera_offset=offset_for_pixel(258, 195, 4.5, yaw=-0.5), camera_height=4.5,
+                              yaw=-0.5, **DRIFT)),
+    ("corner", SUMMIT, dict(camera_offset=offset_for_pixel(50, 35, 4.0, yaw=2.5), camera_height=4.0, yaw=2.5)),
+    ("shadow", HIGH_SUN, dict(camera_height=1.2, jitter=(0.0, 0.0), yaw=0.3, **DRIFT)),
+    ("shadow", HIGH_SUN, dict(camera_height=1.6, jitter=(0.35, 0.1), yaw=1.9)),
+    ("shadow", HIGH_SUN, dict(camera_height=2.2, jitter=(-0.3, 0.45), yaw=-1.0, **DRIFT)),
+    ("shadow", HIGH_SUN_2, dict(camera_height=1.0, jitter=(0.45, -0.45), yaw=2.8)),
+    ("shadow", HIGH_SUN_2, dict(camera_height=1.8, jitter=(-0.5, 0.0), yaw=0.9, **DRIFT)),
+    ("shadow", HIGH_SUN_2, dict(camera_height=2.6, jitter=(0.1, -0.5), yaw=-2.2)),
+    ("blur", SUMMIT, dict(camera_offset=(0.2, 0.1), camera_height=1.2, yaw=0.7, **FAST)),
+    ("blur", SUMMIT_2, dict(camera_offset=(-0.3, 0.2), camera_height=2.0, yaw=-1.4, roll=0.15, **FAST)),
+    ("blur", CAR, dict(camera_offset=(0.2, -0.3), camera_height=1.5, yaw=2.0, vehicle_speed=12.0, **FAST)),
+    ("dark", SUMMIT, dict(camera_offset=(0.4, 0.1), camera_height=2.5, yaw=1.1, log_gain=-0.3, **DRIFT)),
+    ("dark", HIGH_SUN, dict(camera_height=1.4, jitter=(0.2, 0.2), yaw=-0.4, log_gain=-0.3)),
+    ("bright", SUMMIT_2, dict(camera_offset=(-0.2, -0.5), camera_height=3.2, yaw=0.2, log_gain=0.3, **DRIFT)),
+    ("bright", HIGH_SUN_2, dict(camera_height=1.3, jitter=(-0.2, 0.3), yaw=2.4, log_gain=0.3)),
+    ("false", SUMMIT, dict(camera_offset=(-0.6, 0.9), camera_height=3.5, yaw=0.0, false_target=True, **DRIFT)),
+    ("false", SUMMIT_2, dict(camera_offset=(-0.2, 1.0), camera_height=4.5, yaw=1.3, false_target=True)),
+    ("false", CAR, dict(camera_offset=(0.3, 1.2), camera_height=4.0, yaw=-0.7, false_target=True, **DRIFT)),
+    ("false", SUMMIT, dict(camera_offset=(0.1, 1.6), camera_height=2.0, yaw=0.5, false_target=True)),
+    ("false", SUMMIT_2, dict(camera_offset=(0.5, 2.0), camera_height=1.2, yaw=-2.0, false_target=True, **DRIFT)),
+    ("false", SUMMIT, dict(camera_offset=(-0.7, 1.9), camera_height=4.8, yaw=2.9, false_target=True)),
+    ("none", SUMMIT, dict(camera_offset=(3.0, -2.0), camera_height=2.5, yaw=0.8, **DRIFT)),
+    ("none", SUMMIT_2, dict(camera_offset=(-1.6, -1.2), camera_height=1.5, yaw=-1.1)),
+    ("none", CAR, dict(camera_offset=(1.8, 0.0), camera_height=1.0, yaw=0.0, **DRIFT)),
+    ("low", SUMMIT, dict(camera_offset=(0.35, 0.3), camera_height=0.85, roll=0.1, yaw=0.6, **DRIFT)),
+    ("low", SUMMIT_2, dict(camera_offset=(-0.4, 0.1), camera_height=0.95, pitch=-0.1, yaw=-2.3)),
+    ("low", HIGH_SUN, dict(camera_height=0.9, jitter=(0.3, -0.25), yaw=1.5, **DRIFT)),
+    ("low", SUMMIT, dict(camera_offset=(0.1, -0.45), camera_height=0.8, roll=-0.12, yaw=3.0)),
+    ("close", SUMMIT, dict(camera_offset=(0.03, -0.02), camera_height=0.45, yaw=0.9, **DRIFT)),
+    ("close", SUMMIT_2, dict(camera_offset=(-0.05, 0.04), camera_height=0.55, roll=0.08, yaw=-0.3)),
+    ("close", HIGH_SUN, dict(camera_height=0.5, jitter=(0.0, 0.05), tilt_towards_pad=22.0, yaw=2.2)),
+    ("car", CAR, dict(camera_offset=(0.2, 0.3), camera_height=2.5, roll=0.08, yaw=1.4, vehicle_speed=10.0, **DRIFT)),
+    ("car", CAR, dict(camera_offset=(-0.4, 0.2), camera_height=4.0, pitch=0.1, yaw=-0.6, vehicle_speed=15.0)),
+    ("harsh", HARSH, dict(camera_offset=(0.3, 0.2), camera_height=2.5, yaw=0.5, log_gain=-0.5, **DRIFT)),
+    ("harsh", HARSH, dict(camera_height=1.6, jitter=(0.2, -0.2), yaw=-1.7, **FAST)),
+    ("harsh", HARSH, dict(camera_offset=(-0.3, 0.8), camera_height=3.5, yaw=2.0, log_gain=0.5, false_target=True)),
+    ("harsh", HARSH, dict(camera_offset=(0.5, -0.4), camera_height=4.5, roll=0.1, yaw=-2.8, **DRIFT)),
+]
+
+
 def render_realistic(out):
-    raise NotImplementedError
+    """The realistic set: each frame of REALISTIC, the profile's sensor noise left to the test."""
+    renderers, rows = {}, []
+    for index, (label, key, arguments) in enumerate(REALISTIC):
+        vehicle, profile, seed, overrides = key
+        if seed not in renderers:
+            renderers[seed] = FrameRenderer(vehicle, profile, seed, overrides, omit_pixel_noise=True)
+        renderer = renderers[seed]
+        if "jitter" in arguments:
+            arguments = shadow_view(renderer, arguments)
+        # The vehicle heads along world x (the false target 1.6 m to its left, +y); the drone's yaw turns the view.
+        view = View(band=label, vehicle_position=(0.5, -0.5), **arguments)
+        renderer.set_view(view)
+        name = "%02d_%s_%s_h%03d.png" % (index, label, key[0], int(round(view.camera_height * 100)))
+        image, row = renderer.render(name)
+        save_png(os.path.join(out, name), image)
+        rows.append(row)
+    for renderer in renderers.values():
+        renderer.close()
+    return rows
 
 
 def main():

@@ -97,7 +97,19 @@ class FrameRenderer:
         self.marker_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "landing_pad_marker")
         self.false_target_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "false_target")
         self.towards_sun = -np.asarray(self.sim.sun_direction, dtype=float)
+        self._aim_the_sun()
         self.sun_elevation_deg = math.degrees(math.asin(max(-1.0, min(1.0, self.towards_sun[2]))))
+
+    def _aim_the_sun(self):
+        """Points the rendered sun where the simulator drew it. mujoco_sim sets the sun's light_dir and
+        light_pos, but MuJoCo places a light of mode 'track' from light_dir0 and light_pos0, so every profile
+        rendered the model file's sun (77 deg up): the profile's sun is what these frames are to show. A no-op
+        once the simulator sets them itself."""
+        m = self.sim.model
+        sun = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_LIGHT, "sun")
+        if sun >= 0 and float(np.dot(m.light_dir0[sun], -self.towards_sun)) < math.cos(1e-3):  # (ideal: the same)
+            m.light_dir0[sun] = -self.towards_sun
+            m.light_pos0[sun] = self.towards_sun
 
     def close(self):
         self.sim.close()
@@ -183,11 +195,12 @@ class FrameRenderer:
                          for v in np.linspace(-half_y, half_y, n)])
 
     def _shadowed(self, points):
-        """Whether each point's ray towards the sun is blocked (by the drone or anything else)."""
+        """Whether each point's ray towards the sun is blocked: by the drone, or anything but the vehicle that
+        carries the pad (whose strip and marker stand on the pad's top)."""
         sim = self.sim
         geom = np.zeros(1, dtype=np.int32)
         return np.array([mujoco.mj_ray(sim.model, sim.data, p + 1e-3 * self.towards_sun, self.towards_sun, None, 1,
-                                       -1, geom) >= 0 for p in points])
+                                       sim.vehicle_body, geom) >= 0 for p in points])
 
     def _pad_lift(self):
         """Height of the pad's top (its centre site) above its geom's centre [m]."""
