@@ -5,7 +5,7 @@
 // DIR (default: the package's test/data/rendered) holds PNGs and a truth.csv written by
 // uav_vision.rendered_frames (test/render_fixtures.py; scripts/rendered_benchmark renders thousands on the
 // fly and runs this on them). Each frame goes through PadLocalizer::observe() as in the node: IMU
-// attitude, the sonar's median of three readings around the frame, barometer. Printed:
+// attitude, the sonar's median of three readings around the frame, the barometer's mean over 0.1 s. Printed:
 //  - recall with the whole pad in view (found within 0.25 m of the truth), and on partial views;
 //  - false detections: a pad reported where none is in view, or more than 0.25 m from the truth, as a
 //    share of all frames;
@@ -28,7 +28,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include "uav_vision/pad_localizer.h"
-#include "uav_vision/reading_history.h"
 #include "uav_vision/rendered_frames.h"
 
 namespace {
@@ -36,7 +35,6 @@ namespace {
 using uav_vision::RenderedFrame;
 
 constexpr double kFalseDistance = 0.25;  // a detection further than this from the truth is false [m]
-constexpr double kSonarPeriod = 0.04;    // 25 Hz: the readings before and after the frame's [s]
 
 // CPU time of this thread [us]: what the detector costs on one core, whatever else the machine runs.
 double threadCpuMicros() {
@@ -165,16 +163,12 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "detector_benchmark: %s\n", e.what());
         return 2;
       }
-      uav_vision::ReadingHistory sonar;
-      sonar.add(-kSonarPeriod, f.sonar_range_before);
-      sonar.add(0.0, f.sonar_range);
-      sonar.add(kSonarPeriod, f.sonar_range_after);
-      const double sonar_range = sonar.medianNear(0.0, 0.2);
+      const uav_vision::FrameSensors sensors = uav_vision::sensorsAsTheNodeTakesThem(f);
       const auto& localizer = localizerFor(f);
       double t0 = threadCpuMicros();
       const uav_vision::PadObservation o = localizer.observe(image, uav_vision::ColorOrder::kRgb, f.intrinsics,
-                                                             f.imu_attitude, sonar_range, f.baro_altitude,
-                                                             0.5 * f.sonar_field_of_view);
+                                                             f.imu_attitude, sensors.sonar_range,
+                                                             sensors.baro_altitude, sensors.sonar_half_angle);
       observe_us.push_back(threadCpuMicros() - t0);
       const uav_vision::PlaneView view(f.intrinsics, mount, f.attitude, f.camera_height);
       t0 = threadCpuMicros();

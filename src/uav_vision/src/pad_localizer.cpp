@@ -86,7 +86,22 @@ PadObservation PadLocalizer::observe(const cv::Mat& image, ColorOrder order, con
       retry.height = retry_height;
       const Surface retry_seen = surfaceUnderSonar(retry.detection, intrinsics, sonar_half_angle);
       if (retry.found && (retry_seen == Surface::kUnknown || retry_seen == other)) return retry;
+      if (observation.found) {
+        // Found only at the height the image contradicts: its position would be off by the pad's height
+        // over the camera's (12 % at 4 m).
+        observation.found = false;
+        observation.reason = "the image puts the sonar's echo on the " + std::string(seen == Surface::kPad ? "pad" : "ground") +
+                             ", and the pad is found only at the height of the other surface";
+      }
     }
+  } else if (observation.found && height.source == HeightEstimate::Source::kSonarOnGround &&
+             observation.detection.optical_axis_margin_px > params_.sonar_footprint_margin_px) {
+    // The barometer says the sonar's echo comes from the ground, yet the red region covers the beam's axis:
+    // the pad there, 0.5 m higher, would have echoed first. It lies on the ground: not the pad (the red
+    // false target beside the vehicle). Only the axis: a pad at the rim of a wide beam echoes along a slant,
+    // from further than it is below, and can pass for the ground.
+    observation.found = false;
+    observation.reason = "red region under the sonar, which sees the ground: not the pad";
   }
   return observation;
 }

@@ -103,9 +103,10 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   c.imu_max_offset = num("timing/imu_max_offset");
   c.sonar_timeout = num("timing/sonar_timeout");
   c.altimeter_timeout = num("timing/altimeter_timeout");
+  c.altimeter_window = num("timing/altimeter_window");
   c.warn_period = num("timing/warn_period");
   for (const char* key : {"timing/odom_timeout", "timing/imu_max_offset", "timing/sonar_timeout",
-                          "timing/altimeter_timeout", "timing/warn_period"})
+                          "timing/altimeter_timeout", "timing/altimeter_window", "timing/warn_period"})
     requirePositive(pnh, key, num(key));
   if (c.base_frame.empty() || c.world_frame.empty())
     throw ConfigError("parameters '" + pnh.resolveName("frames") + "/base' and '/world' must not be empty");
@@ -280,7 +281,7 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
   }
   // The readings of the frame's capture time, not the newest: the frame is 100-200 ms old.
   const double sonar = sonar_ranges_.medianNear(stamp.toSec(), config_.sonar_timeout);
-  const double altitude = altitudes_.nearest(stamp.toSec(), config_.altimeter_timeout);
+  const double altitude = altitudes_.meanNear(stamp.toSec(), config_.altimeter_window, config_.altimeter_timeout);
   if (std::isnan(sonar) && std::isnan(altitude)) {
     ROS_WARN_THROTTLE(period, "%s: no %s or %s within %.2f s / %.2f s of the frame to give the height: dropped", topic,
                       sonar_sub_.getTopic().c_str(), altimeter_sub_.getTopic().c_str(), config_.sonar_timeout,

@@ -40,4 +40,15 @@ double ReadingHistory::medianNear(double stamp, double max_offset, int count) co
   return *middle;
 }
 
+double ReadingHistory::meanNear(double stamp, double window, double max_offset) const {
+  double sum = 0.0;
+  int count = 0;
+  for (const auto& r : readings_)
+    if (std::abs(r.stamp - stamp) <= window) {
+      sum += r.value;
+      ++count;
+    }
+  return count > 0 ? sum / count : nearest(stamp, max_offset);
+}
+
 }  // namespace uav_vision

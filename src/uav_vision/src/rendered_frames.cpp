@@ -1,5 +1,7 @@
 #include "uav_vision/rendered_frames.h"
 
+#include "uav_vision/reading_history.h"
+
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -75,6 +77,7 @@ std::vector<RenderedFrame> loadRenderedFrames(const std::string& dir) {
     f.sonar_range_after = num("sonar_range_after");
     f.sonar_field_of_view = num("sonar_field_of_view");
     f.baro_altitude = num("baro_altitude");
+    f.baro_around = {num("baro_altitude_m2"), num("baro_altitude_m1"), num("baro_altitude_p1"), num("baro_altitude_p2")};
     f.visible_pad_share = num("visible_pad_share");
     f.visible_pad_corners = int(num("visible_pad_corners"));
     f.strip_corners_in_view = int(num("strip_corners_in_view"));
@@ -88,6 +91,19 @@ std::vector<RenderedFrame> loadRenderedFrames(const std::string& dir) {
     frames.push_back(f);
   }
   return frames;
+}
+
+FrameSensors sensorsAsTheNodeTakesThem(const RenderedFrame& f) {
+  constexpr double kSonarPeriod = 0.04, kBaroPeriod = 0.05;  // 25 Hz and 20 Hz
+  ReadingHistory sonar, baro;
+  sonar.add(-kSonarPeriod, f.sonar_range_before);
+  sonar.add(0.0, f.sonar_range);
+  sonar.add(kSonarPeriod, f.sonar_range_after);
+  const double offsets[5] = {-2 * kBaroPeriod, -kBaroPeriod, 0.0, kBaroPeriod, 2 * kBaroPeriod};
+  const double values[5] = {f.baro_around[0], f.baro_around[1], f.baro_altitude, f.baro_around[2], f.baro_around[3]};
+  for (int i = 0; i < 5; ++i) baro.add(offsets[i], values[i]);
+  // The node's defaults (config/platform_detection.yaml timing/sonar_timeout, altimeter_window, altimeter_timeout).
+  return {sonar.medianNear(0.0, 0.2), baro.meanNear(0.0, 0.1, 0.5), 0.5 * f.sonar_field_of_view};
 }
 
 cv::Mat loadRenderedImage(const std::string& dir, const RenderedFrame& frame, cv::RNG& rng) {

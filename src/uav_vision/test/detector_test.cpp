@@ -353,6 +353,28 @@ TEST(PadLocalizer, PadBelowWithSonarOnThePadAndAnAmbiguousBarometer) {
   EXPECT_NEAR(std::remainder(o.pad_yaw - s.pad_yaw, 2 * M_PI), 0.0, 0.02);
 }
 
+// A red square straight under the camera while the sonar and the barometer agree that the echo comes
+// from the ground: a pad there, 0.5 m higher, would have echoed first. It is something red on the ground.
+TEST(PadLocalizer, ARedSquareUnderASonarThatSeesTheGroundIsNotThePad) {
+  const double camera_height = 2.0, base_above_ground = camera_height + 0.035 + 0.497;
+  const Scene s = makeScene(camera_height, {0.1, 0.05}, 0.3);
+  const PadLocalizer localizer(PadLocalizerParams(), kMount);
+  cv::Mat rgb;
+  cv::cvtColor(s.image, rgb, cv::COLOR_BGR2RGB);
+  const auto identity = Eigen::Quaterniond::Identity();
+  // The sensors: base_link 0.5 m higher than the scene was drawn for, the sonar's echo from the ground below
+  // (the square then measures 1.25 m, within the size tolerance).
+  const PadObservation on_ground = localizer.observe(rgb, ColorOrder::kRgb, simIntrinsics(), identity,
+                                                     base_above_ground - 0.065 + 0.497, base_above_ground + 0.497);
+  EXPECT_FALSE(on_ground.found);
+  EXPECT_NE(on_ground.reason.find("sees the ground"), std::string::npos) << on_ground.reason;
+  // The same image with the sonar on the pad: the pad.
+  const PadObservation on_pad = localizer.observe(rgb, ColorOrder::kRgb, simIntrinsics(), identity,
+                                                  base_above_ground - 0.065 - 0.497, base_above_ground);
+  ASSERT_TRUE(on_pad.found) << on_pad.reason;
+  EXPECT_EQ(on_pad.height.source, HeightEstimate::Source::kSonarOnPad);
+}
+
 TEST(PadLocalizer, NoHeightNoPosition) {
   const Scene s = makeScene(2.0, {0, 0}, 0);
   const PadObservation o = PadLocalizer(PadLocalizerParams(), kMount)

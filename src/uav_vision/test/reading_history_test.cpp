@@ -54,6 +54,15 @@ TEST(ReadingHistory, NothingNearTheStampIsNaN) {
   EXPECT_NEAR(history.medianNear(1.03, 0.08), 2.0 - 0.5 * 1.0, 1e-12);
 }
 
+TEST(ReadingHistory, TheBarometerIsAveragedAroundTheStamp) {
+  ReadingHistory history;  // 20 Hz, alternately 0.1 m above and below 5 m
+  for (int i = 0; i <= 20; ++i) history.add(i * 0.05, 5.0 + (i % 2 ? 0.1 : -0.1));
+  EXPECT_NEAR(history.meanNear(0.5, 0.11, 0.5), 5.0 - 0.1 / 5.0, 1e-9);  // five readings: three low, two high
+  EXPECT_NEAR(history.meanNear(0.525, 0.05, 0.5), 5.0, 1e-9);          // two: one of each
+  EXPECT_NEAR(history.meanNear(1.3, 0.1, 0.5), 4.9, 1e-9);              // none that close: the nearest
+  EXPECT_TRUE(std::isnan(history.meanNear(2.0, 0.1, 0.5)));
+}
+
 TEST(ReadingHistory, KeepsASecondAndRestartsWhenTimeGoesBack) {
   ReadingHistory history = descendingSonar(3.0);
   EXPECT_TRUE(std::isnan(history.nearest(1.0, 0.2)));  // older than a second before the newest

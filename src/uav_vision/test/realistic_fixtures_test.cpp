@@ -45,18 +45,17 @@ class RealisticFixtures : public ::testing::Test {
     for (const auto& f : frames_) images_.push_back(loadRenderedImage(realisticFixturesDir(), f, rng));
   }
 
-  // Each frame through the localizer, as the node does (sonar: the median of the three readings).
+  // Each frame through the localizer, with the sensor readings as the node takes them.
   static std::vector<Result> observeAll(const std::function<void(RenderedFrame&)>& change = nullptr) {
     std::vector<Result> results;
     for (size_t i = 0; i < frames_.size(); ++i) {
       RenderedFrame f = frames_[i];
       if (change) change(f);
       const PadLocalizer localizer = localizerFor(f);
-      const double sonar = std::max(std::min(f.sonar_range_before, f.sonar_range),
-                                    std::min(std::max(f.sonar_range_before, f.sonar_range), f.sonar_range_after));
+      const FrameSensors sensors = sensorsAsTheNodeTakesThem(f);
       Result r;
-      r.own_sensors = localizer.observe(images_[i], ColorOrder::kRgb, f.intrinsics, f.imu_attitude, sonar,
-                                        f.baro_altitude, 0.5 * f.sonar_field_of_view);
+      r.own_sensors = localizer.observe(images_[i], ColorOrder::kRgb, f.intrinsics, f.imu_attitude, sensors.sonar_range,
+                                        sensors.baro_altitude, sensors.sonar_half_angle);
       r.true_view = localizer.observeAtHeight(images_[i], ColorOrder::kRgb, f.intrinsics, f.attitude, f.camera_height);
       if (r.own_sensors.found) r.error = horizontalError(r.own_sensors.centre_in_body, f.pad_in_body);
       if (r.true_view.found) r.image_error = horizontalError(r.true_view.centre_in_body, f.pad_in_body);

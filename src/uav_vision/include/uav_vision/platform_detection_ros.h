@@ -38,6 +38,7 @@ struct PlatformDetectionConfig {
   double imu_max_offset = 0.05;    // [s]
   double sonar_timeout = 0.2;      // [s]
   double altimeter_timeout = 0.5;  // [s]
+  double altimeter_window = 0.1;   // [s]
   double warn_period = 5.0;        // [s]
 
   // Reads every key of config/platform_detection.yaml from `pnh`; throws ConfigError naming the first

@@ -5,7 +5,8 @@
 // frame: the drone may have descended 10 cm since, or crossed the pad's edge. The readings are kept for a
 // second and looked up at the frame's capture time. No interpolation: between a reading on the pad and
 // one on the ground it would give a height that is neither. The sonar takes the median of the readings
-// nearest to the stamp, which drops a single spurious echo (2-5 % of the readings).
+// nearest to the stamp, which drops a single spurious echo (2-5 % of the readings); the barometer the mean
+// of those close to it, against its noise.
 #pragma once
 
 #include <deque>
@@ -26,6 +27,11 @@ class ReadingHistory {
   // The median of the (up to) `count` readings nearest to `stamp` within `max_offset` of it (of two, the
   // nearer one); NaN when none.
   double medianNear(double stamp, double max_offset, int count = 3) const;
+
+  // The mean of the readings within `window` of `stamp` (the barometer: white noise of 0.1 m, while the
+  // drone climbs or sinks a few centimetres over a tenth of a second, evenly on both sides); without any,
+  // nearest(stamp, max_offset).
+  double meanNear(double stamp, double window, double max_offset) const;
 
   bool empty() const { return readings_.empty(); }
 

@@ -3,6 +3,7 @@
 // detector_benchmark; not part of the detector.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,9 @@ struct RenderedFrame {
   CameraIntrinsics intrinsics;                                   // with the lens distortion
   Eigen::Vector3d pad_in_body, pad_world_aligned, strip_in_body;  // from base_link [m]
   Eigen::Quaterniond attitude, imu_attitude;                     // true, and as the IMU reported it
-  double tilt_deg = 0, baro_altitude = 0;
+  double tilt_deg = 0;
+  double baro_altitude = 0;                  // the frame's barometric altitude [m] ...
+  std::array<double, 4> baro_around{};       // ... and 100 and 50 ms before, 50 and 100 ms after it
   double sonar_range = 0, sonar_range_before = 0, sonar_range_after = 0;  // at the frame, 40 ms before, after
   double sonar_field_of_view = 0;                                // the beam's full width [rad]
   double visible_pad_share = 0;                                  // of the pad's area in the image [0..1]
@@ -33,6 +36,13 @@ struct RenderedFrame {
   bool wholePadInView() const { return visible_pad_corners == 4; }
   bool padInView() const { return visible_pad_share > 0.0; }
 };
+
+// The frame's sonar range and barometric altitude as the node takes them from its readings (ReadingHistory
+// at the frame's stamp: the sonar's median of three, the barometer's mean over 0.1 s), half the sonar's beam.
+struct FrameSensors {
+  double sonar_range, baro_altitude, sonar_half_angle;
+};
+FrameSensors sensorsAsTheNodeTakesThem(const RenderedFrame& frame);
 
 // Throws std::runtime_error naming the file and the problem.
 std::vector<RenderedFrame> loadRenderedFrames(const std::string& dir);

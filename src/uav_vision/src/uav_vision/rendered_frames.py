@@ -36,7 +36,8 @@ TRUTH_COLUMNS = [
     "pad_base_x", "pad_base_y", "pad_base_z", "pad_world_x", "pad_world_y", "pad_world_z",
     "pad_camera_x", "pad_camera_y", "pad_camera_z", "strip_base_x", "strip_base_y", "strip_base_z",
     "qw", "qx", "qy", "qz", "imu_qw", "imu_qx", "imu_qy", "imu_qz", "tilt_deg",
-    "sonar_range", "sonar_range_before", "sonar_range_after", "sonar_field_of_view", "baro_altitude",
+    "sonar_range", "sonar_range_before", "sonar_range_after", "sonar_field_of_view",
+    "baro_altitude", "baro_altitude_m2", "baro_altitude_m1", "baro_altitude_p1", "baro_altitude_p2",
     "visible_pad_share", "visible_pad_corners", "strip_corners_in_view", "marker_corners_in_view",
     "pad_shadow_share", "false_target_share", "blur_px", "exposure_gain", "sun_elevation_deg",
     "pixel_noise_std_omitted",
@@ -80,7 +81,8 @@ class FrameRenderer:
     """A simulator of one vehicle, realism profile and seed (the seed draws the sun); ``render`` a View.
     ``omit_pixel_noise``: render without the profile's sensor noise (small PNGs for the repository) and
     record its std-dev in the truth for the consumer to add. ``sonar_neighbours``: draw three sonar readings
-    (the frame's and one each side of it), else one (as the first fixtures did)."""
+    (the frame's and one each side of it) and five barometric altitudes, else one each (as the first fixtures
+    did)."""
 
     def __init__(self, vehicle, profile, seed, overrides=None, omit_pixel_noise=False, sonar_neighbours=True):
         overrides = dict(overrides or {})
@@ -238,6 +240,8 @@ class FrameRenderer:
         sonars = [sim.sonar() for _ in range(3)] if self.sonar_neighbours else [sim.sonar()] * 3
         imu_quat, _, _ = sim.imu()
         altitude, _ = sim.altimeter()
+        # The barometer at 20 Hz: two readings each side of the frame's, each with its own noise.
+        around = [sim.altimeter()[0] for _ in range(4)] if self.sonar_neighbours else [altitude] * 4
         pad_rel_world = pad - base
         k1, k2, p1, p2, k3 = sim.camera_distortion()
         return {
@@ -258,7 +262,8 @@ class FrameRenderer:
             "sonar_range": sonars[1], "sonar_range_before": sonars[0], "sonar_range_after": sonars[2],
             # The beam the sonar's echoes come from, as sensor_msgs/Range field_of_view.
             "sonar_field_of_view": 2.0 * math.radians(sim.realism["sonar_beam_half_angle_deg"]),
-            "baro_altitude": altitude,
+            "baro_altitude": altitude, "baro_altitude_m2": around[0], "baro_altitude_m1": around[1],
+            "baro_altitude_p1": around[2], "baro_altitude_p2": around[3],
             "visible_pad_share": float(np.mean(pad_grid_visible)),
             "visible_pad_corners": int(np.sum(self._inside(self._project(pad_corners, camera, cam_rot_world)))),
             "strip_corners_in_view": int(np.sum(self._inside(self._project(strip_corners, camera, cam_rot_world)))),
