@@ -720,10 +720,10 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const s
   }
   // The square must be red wherever it is in view: the outline lying inside the square is not enough, as
   // the corner or the edge of another red thing (on the ground beside the vehicle) fits a square too.
-  const Coverage coverage = redCoverage(view, chosen->centre, axes);
-  if (coverage.red_share < p.min_partial_coverage) {
+  const double coverage = redCoverage(view, chosen->centre, axes);
+  if (coverage < p.min_partial_coverage) {
     d.reason = format("the %.2f m square fitted to the red edges is red in only %.0f%% of its part in view", pad.side,
-                      100.0 * coverage.red_share);
+                      100.0 * coverage);
     return false;
   }
   // A corner of red alone could belong to anything red and square-cornered (the false target on the ground
@@ -773,8 +773,8 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const s
   return true;
 }
 
-PadDetector::Coverage PadDetector::redCoverage(const PlaneView& view, const Eigen::Vector2d& centre,
-                                               const Eigen::Vector2d (&axes)[2]) const {
+double PadDetector::redCoverage(const PlaneView& view, const Eigen::Vector2d& centre,
+                                const Eigen::Vector2d (&axes)[2]) const {
   // A grid over the square (short of its edges, which the image blurs), each point looked up in the mask.
   constexpr int kGrid = 15;
   const double reach = 0.45 * params_.pad.side;
@@ -794,7 +794,7 @@ PadDetector::Coverage PadDetector::redCoverage(const PlaneView& view, const Eige
       ++in_view;
       red += pad_mask_.at<uint8_t>(cvRound(pixel.y), cvRound(pixel.x)) > 0;
     }
-  return {in_view > 0 ? double(red) / in_view : 0.0};
+  return in_view > 0 ? double(red) / in_view : 0.0;
 }
 
 bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size,

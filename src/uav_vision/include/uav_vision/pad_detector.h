@@ -123,11 +123,9 @@ class PadDetector {
                      const PlaneView* view, Candidate& candidate) const;
   bool evaluatePartial(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
                        const cv::Size& size, const PlaneView& view, Candidate& candidate) const;
-  // How much of a square of the pad's size (centre and axes on the plane) is pad-coloured where it is in view.
-  struct Coverage {
-    double red_share;  // of its part in view [0..1]
-  };
-  Coverage redCoverage(const PlaneView& view, const Eigen::Vector2d& centre, const Eigen::Vector2d (&axes)[2]) const;
+  // The share of a square of the pad's size (centre and axes on the plane) that is pad-coloured, of its part
+  // in view [0..1].
+  double redCoverage(const PlaneView& view, const Eigen::Vector2d& centre, const Eigen::Vector2d (&axes)[2]) const;
   // Index in strip_outlines_ of the largest strip inside `outline`, or -1.
   int findStrip(const std::vector<cv::Point>& outline) const;
   // The centre marker (a white blob of computeMasks) inside one of the red `outlines`; false (with
