@@ -105,8 +105,9 @@ class NodeInputsTest(unittest.TestCase):
             wait_for(lambda p=pub: p.get_num_connections() > 0, "platform_detection to subscribe to " + pub.name)
 
     def publish_sensors(self, stamp, imu_quat=(1.0, 0.0, 0.0, 0.0), sonar=CAMERA_HEIGHT - 0.03,
-                        altitude=CAMERA_HEIGHT + 0.035 + PAD_TOP, fx=FX, distortion=(0.0,) * 5):
-        self.pub["info"].publish(camera_info(stamp, fx, distortion=distortion))
+                        altitude=CAMERA_HEIGHT + 0.035 + PAD_TOP, fx=FX, distortion=(0.0,) * 5, info=True):
+        if info:
+            self.pub["info"].publish(camera_info(stamp, fx, distortion=distortion))
         imu = Imu()
         imu.header.stamp, imu.header.frame_id = stamp, "ardrone/base_link"
         imu.orientation.w, imu.orientation.x, imu.orientation.y, imu.orientation.z = imu_quat
@@ -118,12 +119,13 @@ class NodeInputsTest(unittest.TestCase):
         alt.header.stamp = stamp
         self.pub["altimeter"].publish(alt)
 
-    def detect_once(self, image=None, distortion=(0.0,) * 5, stamp=None, publish_sensors=True):
-        """A good frame with good sensors: returns the published pad position. The frame is sent again
-        until its result comes, as the sensor messages travel on other connections and may arrive later."""
+    def detect_once(self, image=None, distortion=(0.0,) * 5, stamp=None, publish_sensors=True, info=True):
+        """A good frame with good sensors (``info`` False: all but camera_info): returns the published pad
+        position. The frame is sent again until its result comes, as the sensor messages travel on other
+        connections and may arrive later."""
         stamp = stamp or rospy.Time.now()
         if publish_sensors:
-            self.publish_sensors(stamp, distortion=distortion)
+            self.publish_sensors(stamp, distortion=distortion, info=info)
         frame = image_msg(stamp, pad_image() if image is None else image)
         last_sent = [0.0]
 
@@ -200,14 +202,15 @@ class NodeInputsTest(unittest.TestCase):
 
     def test_6_malformed_lens_distortion_is_dropped_saying_what_is_wrong(self):
         stamp = rospy.Time.now()
-        self.pub["info"].publish(camera_info(stamp, distortion=LENS[:4]))
-        self.expect_warning("/ardrone/bottom/camera_info", "plumb_bob needs 5", "D has 4")
-        self.pub["info"].publish(camera_info(stamp, distortion=[-0.3, float("nan"), 0.0, 0.0, 0.0]))
-        self.expect_warning("/ardrone/bottom/camera_info", "D[1] is not a finite number")
-        self.pub["info"].publish(camera_info(stamp, model="equidistant", distortion=[0.1, 0.0, 0.0, 0.0]))
-        self.expect_warning("/ardrone/bottom/camera_info", "'equidistant' is not supported")
+        info = self.pub["info"]
+        self.expect_warning(info, camera_info(stamp, distortion=LENS[:4]), "camera_info", "plumb_bob needs 5",
+                            "D has 4")
+        self.expect_warning(info, camera_info(stamp, distortion=[-0.3, float("nan"), 0.0, 0.0, 0.0]), "camera_info",
+                            "D[1] is not a finite number")
+        self.expect_warning(info, camera_info(stamp, model="equidistant", distortion=[0.1, 0.0, 0.0, 0.0]),
+                            "camera_info", "'equidistant' is not supported")
         # Only the bad ones were dropped: the last good camera_info still serves.
-        self.detect_once(publish_sensors=False)
+        self.detect_once(info=False)
 
     def test_7_distorted_frame_is_undistorted_with_camera_info_d(self):
         # The pad off towards a corner, where the lens bends it by about 3 px (3 cm at this height).
