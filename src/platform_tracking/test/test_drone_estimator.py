@@ -319,3 +319,4 @@ def test_over_the_vehicle_the_flow_sees_the_drone_relative_to_it_and_the_estimat
     assert est.unseen_velocity[1] == pytest.approx((2.0, 0.0), abs=0.01)
     error = horizontal_error(truth, estimates, after=5.0, times=times)
     assert error.max() < 0.2
+

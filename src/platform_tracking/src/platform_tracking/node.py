@@ -44,7 +44,7 @@ from std_msgs.msg import Bool, Empty, String
 
 from .controller import DroneState, PadPrediction
 from .estimator import DroneEstimator
-from .flow_surface import FlowSurface
+from .flow_surface import FlowSurface, WeightForecast
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
 from .state_machine import Inputs, State, TrackingStateMachine
 
@@ -250,6 +250,7 @@ class TrackingNode:
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
         self.estimate = None          # (stamp, DroneState without sonar)
         self.unseen = None            # (stamp, world xy, weight) of the vehicle's velocity the flow does not see
+        self.flow_weight = WeightForecast()
         self.sonar = None             # median of the last three sonar ranges (a spurious echo is one of them), or None
         self.sonar_ranges = collections.deque(maxlen=3)
         self.navdata_state = None
@@ -298,6 +299,7 @@ class TrackingNode:
         with self.lock:
             self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]),
                            float(msg.vector.z) if math.isfinite(msg.vector.z) else 0.0)
+            self.flow_weight.add(self.unseen[0], self.unseen[2])
 
     def on_path(self, msg):
         if msg.header.frame_id not in WORLD_FRAMES:
@@ -383,7 +385,8 @@ class TrackingNode:
                 state = self.estimate[1]
                 drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
             fresh = self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE
-            flow_weight = self.unseen[2] if fresh else 0.0
+            # The weight when the command reaches the drone: a navdata old now, and a link's delay later.
+            flow_weight = self.flow_weight.at(t + self.params.flow_weight_lead) if fresh else 0.0
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in self.requests, land="land" in self.requests,
                             force_land="force_land" in self.requests, landing_allowed=self.landing_allowed,
