@@ -320,3 +320,51 @@ def test_over_the_vehicle_the_flow_sees_the_drone_relative_to_it_and_the_estimat
     error = horizontal_error(truth, estimates, after=5.0, times=times)
     assert error.max() < 0.2
 
+
+
+def test_inertial_velocity_follows_a_trusted_reference_and_coasts_through_an_untrusted_one():
+    """The complementary filter: a reading with the usual uncertainty pulls the velocity to it within a fraction
+    of a second; a reading whose uncertainty is metres per second (a fast vehicle, the flow's weight unsure)
+    barely moves it, and the accelerometer carries a ramp instead."""
+    from platform_tracking.estimator import InertialVelocity
+    filt = InertialVelocity(gain=20.0, reference_std=0.5)
+    assert not filt.fresh(0.0)
+    assert filt.correct(0.0, (3.0, 0.0), 0.0) == pytest.approx((3.0, 0.0))  # no accelerations yet: the reading
+    t = 0.0
+    for _ in range(50):  # 1 s at 50 Hz: accelerating at 1 m/s^2 in x while the reading says so
+        t += 0.02
+        filt.accelerate(t, (1.0, 0.0))
+        filt.correct(t, (3.0 + t, 0.0), 0.0)
+    assert filt.fresh(t) and filt.trust == pytest.approx(1.0)
+    assert filt.velocity[0] == pytest.approx(4.0, abs=0.05)
+    rng = np.random.default_rng(3)
+    for _ in range(50):  # one more second: the readings swing by 3 m/s but are said to be 5 m/s uncertain
+        t += 0.02
+        filt.accelerate(t, (1.0, 0.0))
+        filt.correct(t, (3.0 + t + rng.normal(0.0, 3.0), rng.normal(0.0, 3.0)), 5.0)
+    assert filt.trust < 0.02
+    assert filt.velocity == pytest.approx((5.0, 0.0), abs=0.3)
+    filt.accelerate(t + 1.0, (1.0, 0.0))  # a gap of a second is not integrated across...
+    assert filt.velocity[0] == pytest.approx(5.0, abs=0.3)
+    assert filt.correct(t + 2.0, (7.0, 0.0), 5.0) == pytest.approx((7.0, 0.0))  # ...nor trusted: the reading
+
+
+def test_the_accelerometer_turned_into_the_world_drives_the_inertial_velocity():
+    """A drone pitched forward with heading 90 deg accelerates along world y: the IMU's specific force, turned by
+    its orientation, reaches the inertial filter as a world acceleration (gravity cancelled)."""
+    params = EstimatorParams()
+    est = DroneEstimator(params)
+    pitch, yaw = math.radians(5.0), math.radians(90.0)
+    # world <- body: yaw about z, then pitch about y (nose down accelerates forward)
+    qz = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+    qy = (math.cos(pitch / 2), 0.0, math.sin(pitch / 2), 0.0)
+    w1, x1, y1, z1 = qz
+    w2, x2, y2, z2 = qy
+    q = (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+         w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)
+    thrust = 9.81 / math.cos(pitch)  # level flight: the thrust along body z holds the weight
+    est.inertial.correct(0.0, (0.0, 0.0), 0.0)
+    for i in range(1, 51):
+        est.imu(i * 0.02, q, specific_force=(0.0, 0.0, thrust))
+    expected = 9.81 * math.tan(pitch)  # m/s^2 along world y, for 0.98 s
+    assert est.inertial.velocity == pytest.approx((0.0, expected * 0.98), abs=0.02)

@@ -146,7 +146,7 @@ class Simulator:
         self._renderer = None
         self.camera_frame = None
         self.camera_fovy = float(m.cam_fovy[self.camera])  # of the published image; the render may be wider
-        self.vehicle_rectangle = _vehicle_top_rectangle(m, self.vehicle_body)
+        self.vehicle_rectangle = _textured_top_rectangle(m, self.pad_geom)
         self._init_realism()
         self._place_at_start()
 
@@ -724,17 +724,12 @@ class Simulator:
             self._renderer = None
 
 
-def _vehicle_top_rectangle(model, body):
-    """(x_min, x_max, y_min, y_max) [m] in the vehicle frame of the vehicle's box geoms seen from above (the
-    pad, the chassis): what the drone's optical flow sees of the vehicle."""
-    import mujoco
-    xs, ys = [], []
-    for geom in range(model.ngeom):
-        if model.geom_bodyid[geom] == body and model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_BOX:
-            (x, y, _), (hx, hy, _) = model.geom_pos[geom], model.geom_size[geom]
-            xs += [x - hx, x + hx]
-            ys += [y - hy, y + hy]
-    return (min(xs), max(xs), min(ys), max(ys)) if xs else (0.0, 0.0, 0.0, 0.0)
+def _textured_top_rectangle(model, pad_geom):
+    """(x_min, x_max, y_min, y_max) [m] in the vehicle frame of what the drone's optical flow can follow on the
+    vehicle: the pad, whose edges, strip and marker are features (a car's roof is smooth paint, and the
+    Summit XL's body lies under the pad)."""
+    (x, y, _), (hx, hy, _) = model.geom_pos[pad_geom], model.geom_size[pad_geom]
+    return (x - hx, x + hx, y - hy, y + hy)
 
 
 def _as_slice(indices):

@@ -39,6 +39,8 @@ import math
 import numpy as np
 from landing_msgs.geometry import yaw_from_quaternion
 
+from .flow_surface import rotation_of
+
 from .params import EstimatorParams
 
 HISTORY_SPAN = 1.5  # seconds of past estimates kept for late GPS fixes [s]
@@ -205,6 +207,50 @@ class HorizontalFilter:
         self.P = 0.5 * (self.P + self.P.T)
 
 
+class InertialVelocity:
+    """The horizontal world velocity carried by the accelerometer between readings of a reference velocity
+    (the flow's, corrected), pulled towards each reading with a gain that falls as the reading's uncertainty
+    grows: a complementary filter. Over a fast vehicle the flow's velocity swings by the vehicle's speed times
+    every error of the weight (flow_surface.py): 0.1 of it is 1.5 m/s at 15 m/s. There the accelerometer
+    (biased by a few cm/s^2, i.e. a few cm/s over the second of a descent) carries the velocity instead."""
+
+    MAX_STEP = 0.2  # a gap longer than this between accelerations is not integrated across, nor trusted [s]
+
+    def __init__(self, gain, reference_std):
+        self.gain, self.reference_std = gain, reference_std
+        self.velocity = None       # world (x, y) [m/s]
+        self.accelerated = None    # time of the last acceleration
+        self.corrected = None      # time of the last reading
+        self.trust = 1.0           # the last reading's share of the gain (0: accelerometer alone, 1: the reading)
+
+    def fresh(self, t):
+        """True while accelerations arrive: without them the velocity is the reading's."""
+        return self.velocity is not None and self.accelerated is not None and t - self.accelerated <= self.MAX_STEP
+
+    def accelerate(self, t, acceleration_xy):
+        """Integrates a world horizontal acceleration [m/s^2] measured at ``t``."""
+        dt = None if self.accelerated is None else t - self.accelerated
+        if dt is not None and dt <= 0.0:
+            return
+        if self.velocity is not None and dt is not None and dt <= self.MAX_STEP:
+            self.velocity = self.velocity + np.asarray(acceleration_xy, dtype=float) * dt
+        self.accelerated = t
+
+    def correct(self, t, reference_xy, reference_std):
+        """Pulls the velocity towards a reference reading [m/s] whose uncertainty ``reference_std`` [m/s] adds to
+        the reference's usual one (``self.reference_std``); returns the velocity."""
+        reference = np.asarray(reference_xy, dtype=float)
+        floor = self.reference_std ** 2
+        self.trust = floor / (floor + reference_std ** 2)
+        if not self.fresh(t) or self.corrected is None:
+            self.velocity = reference
+        else:
+            dt = min(self.MAX_STEP, max(0.0, t - self.corrected))
+            self.velocity = self.velocity + (1.0 - math.exp(-self.gain * self.trust * dt)) * (reference - self.velocity)
+        self.corrected = t
+        return self.velocity
+
+
 @dataclasses.dataclass
 class Estimate:
     """The estimate at ``time``: world position [m], world velocity [m/s], orientation (w, x, y, z),
@@ -229,7 +275,11 @@ class DroneEstimator:
         self.last_sonar_height = None    # (time, base_link above the surface the sonar sees) [s, m]
         self.orientations = collections.deque()  # (time, orientation) of the last second of IMU messages
         self.unseen_velocity = (None, np.zeros(2))  # (time, world xy) of the vehicle's velocity the flow did not see
+        self.modelled_unseen = (None, np.zeros(2))  # ...as the weight's model has it (flow_surface.py)
         self.flow_weight = 0.0           # how much the flow follows the vehicle (0 ground .. 1 vehicle), blended as it
+        self.flow_weight_spread = 0.0    # how much the weight changes within weight_position_std of the estimate [-]
+        self.inertial = InertialVelocity(params.inertial_gain, params.inertial_reference_std) \
+            if params.inertial_gain > 0.0 else None
         self.history = collections.deque()  # (time, position, velocity) after each prediction
         self.horizontal = HorizontalFilter(params.position_process_noise, params.flow_bias_process_noise,
                                            params.flow_velocity_std, params.initial_flow_bias_std,
@@ -325,8 +375,9 @@ class DroneEstimator:
         return Estimate(t, position, velocity, tuple(self.orientation), self.yaw, variance)
 
     # ----- sensors -------------------------------------------------------------------------------
-    def imu(self, t, orientation_wxyz):
-        """IMU orientation, world <- body, as (w, x, y, z)."""
+    def imu(self, t, orientation_wxyz, specific_force=None):
+        """IMU orientation, world <- body, as (w, x, y, z), and optionally the accelerometer's specific force
+        (body frame, gravity included) [m/s^2]."""
         w, x, y, z = orientation_wxyz
         norm = math.sqrt(w * w + x * x + y * y + z * z)
         if not norm > 0.5:  # also false for NaN
@@ -339,15 +390,31 @@ class DroneEstimator:
             self.orientations.popleft()
         self.yaw = yaw_from_quaternion(w, x, y, z)
         self.tilt_cos = 1.0 - 2.0 * (x * x + y * y)
+        if self.inertial is not None and specific_force is not None and all(map(math.isfinite, specific_force)):
+            acceleration = rotation_of(w, x, y, z) @ np.asarray(specific_force, dtype=float)
+            # Turned like the flow by the yaw's drift the horizontal filter has learnt (its a, c).
+            a, c = self.horizontal.scale_and_turn
+            turn = math.atan2(c, a) if self.horizontal.initialised else 0.0
+            self.inertial.accelerate(t, heading_to_world(acceleration[0], acceleration[1], turn))
         return True
 
     def flow(self, t, vx_heading, vy_heading, vz):
         """Navdata velocity: forward/left in the drone's heading frame, vertical [m/s]. Over the vehicle, the
         part of the vehicle's velocity the flow did not see is kept beside it (``unseen_velocity``)."""
         self._advance(t)
-        self.unseen_velocity = (t, self._unseen_velocity(t))
+        modelled = self._unseen_velocity(t)
+        self.modelled_unseen = (t, modelled)
         self.flow_heading = (vx_heading, vy_heading, vz)
         self.flow_time = t
+        unseen = modelled
+        if self.inertial is not None:
+            seen = self.horizontal.world_velocity(self.flow_heading, self.yaw)
+            vehicle_velocity = self._vehicle_velocity(t)
+            speed = 0.0 if vehicle_velocity is None else float(np.hypot(*vehicle_velocity))
+            velocity = self.inertial.correct(t, seen + modelled, self.flow_weight_spread * speed)
+            if self.inertial.fresh(t):
+                unseen = velocity - seen  # what the accelerometer says the flow did not see
+        self.unseen_velocity = (t, unseen)
         return True
 
     def pad(self, t, position, velocity):
@@ -374,16 +441,22 @@ class DroneEstimator:
         """The vehicle's velocity the flow does not see at ``t`` (world x, y): w v_vehicle (flow_surface.py),
         blended in over the firmware's response time as the firmware blends each flow reading into its
         estimate (its accelerometer carries the fast part). Zero away from the vehicle or without a pad."""
-        last_t, last = self.unseen_velocity
-        target, weight = np.zeros(2), 0.0
+        last_t, last = self.modelled_unseen
+        target, weight, spread = np.zeros(2), 0.0, 0.0
         if self.surface is not None and self.surface.enabled and self.pad_state is not None and self.ready:
             pad_t, pad_position, pad_velocity = self.pad_state
             vehicle_velocity = self._vehicle_velocity(t)
             if abs(t - pad_t) <= PAD_MAX_AGE and vehicle_velocity is not None:
                 pad_now = pad_position + pad_velocity * (t - pad_t)
-                weight = self.surface.weight(self._position_over(pad_now, t), self._orientation_at(t), pad_now,
-                                             vehicle_velocity)
+                position, orientation = self._position_over(pad_now, t), self._orientation_at(t)
+                weight = self.surface.weight(position, orientation, pad_now, vehicle_velocity)
                 target = weight * vehicle_velocity
+                if self.inertial is not None:
+                    # The height above the pad comes from the sonar (centimetres), the rest from GPS and vision.
+                    steps = self.p.weight_position_std * np.diag([1.0, 1.0, 0.25])
+                    spread = max(abs(self.surface.weight(position + offset, orientation, pad_now, vehicle_velocity)
+                                     - weight) for offset in np.vstack([steps, -steps]))
+        self.flow_weight_spread = spread
         if weight > 0.0:
             self.counters["flow_over_vehicle"] += 1
         if last_t is None or t <= last_t or self.surface is None:

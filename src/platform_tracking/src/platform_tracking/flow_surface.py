@@ -14,8 +14,8 @@ from the pad filter, whose fixes it places itself), and publishes both (ardrone/
 The tracker scales its feed-forward (the predicted pad velocity) by 1 - w: at w = 1 its command is the
 correction alone, relative to the pad, and no error of any absolute velocity (the report's noise and
 delay, the estimate's) moves the drone off it. The weight comes from the drone's estimated pose (its
-height from the sonar), the predicted pad and the vehicle's top (a rectangle around the pad,
-config/flow_surface_<vehicle>.yaml): the stack knows its drone's firmware as a calibration would tell it,
+height from the sonar), the predicted pad and what the flow can follow on the vehicle (a rectangle around
+the pad, config/flow_surface_<vehicle>.yaml: the pad itself): the stack knows its drone's firmware as a calibration would tell it,
 not from the simulator.
 """
 import collections

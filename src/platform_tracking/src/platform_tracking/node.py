@@ -146,7 +146,8 @@ class EstimatorNode:
         t = stamp_of(msg)
         with self.lock:
             self._at(t)
-            if not self.estimator.imu(t, (q.w, q.x, q.y, q.z)):
+            a = msg.linear_acceleration
+            if not self.estimator.imu(t, (q.w, q.x, q.y, q.z), (a.x, a.y, a.z)):
                 return warn_dropped("ardrone/imu", "orientation is not a unit quaternion")
             estimate = self.estimator.estimate(t)
         if estimate is not None:
