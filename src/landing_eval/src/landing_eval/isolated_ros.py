@@ -150,7 +150,8 @@ class IsolatedProcess:
 class IsolatedLaunch(IsolatedProcess):
     """``roslaunch -p PORT`` of ``launch_args`` (package, file, arg:=value...) under its own master on a
     free port, so several runs can coexist. ``master_uri`` is what clients in this process must use (set
-    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``)."""
+    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``). With a master already running on ``port``
+    (IsolatedCore) roslaunch uses it rather than starting one of its own."""
 
     def __init__(self, launch_args, log_path, port=None):
         self.port = port or free_port()
@@ -173,3 +174,13 @@ class IsolatedLaunch(IsolatedProcess):
             except Exception:  # master not up yet
                 time.sleep(0.05)
         raise TimeoutError("no ROS master on port %d after %.0f s; see %s" % (self.port, timeout, self.log_path))
+
+
+class IsolatedCore(IsolatedLaunch):
+    """``roscore -p PORT`` on a free port: the master (and rosout) in a process tree of its own. A launch run
+    against it (IsolatedLaunch with the same port) then does not own the master: roslaunch ends its whole graph
+    when a master it started dies, whereas nodes whose master dies go on over their connections."""
+
+    def __init__(self, log_path, port=None):
+        super().__init__([], log_path, port)
+        self.command = ["roscore", "-p", str(self.port)]
