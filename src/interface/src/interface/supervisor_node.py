@@ -45,6 +45,7 @@ SERVICES = ("landing", "emergency", "manual", "continue")
 TRACKER_STATES = tuple(state.value for state in TrackerState)
 NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes
 WORLD_FRAME, BODY_FRAME = "world", "ardrone/base_link"  # docs/conventions.md
+REPEAT_S = 2.0  # the same operator word again within this (sim) time is a repetition, not a new command [s]
 NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
     "rate_hz": (5.0, 200.0),
     "platform_odom_timeout_s": (0.05, 60.0),
@@ -113,6 +114,7 @@ class SupervisorNode:
         self.last_warning_sent = -1e9
         self.lockstep = LockstepAcker(period=1.0 / self.params["rate_hz"])
         self.rejections = RosRejectionLog()
+        self.last_command = (None, 0.0)  # (word, sim time) of the latest operator command taken
 
         self.pub_decisions = rospy.Publisher("supervisor/decisions", String, queue_size=100)
         self.pub_mode = rospy.Publisher("supervisor/mode", String, queue_size=1, latch=True)
@@ -234,10 +236,15 @@ class SupervisorNode:
         self.navdata = (rospy.get_time(), msg.state)
 
     def _on_operator(self, msg):
-        # An unknown word is garbage on the topic (a decision is for commands an operator gave).
-        problem = choice_problem(msg.data.strip().lower(), OPERATOR_COMMANDS, "command")
+        # An unknown word is garbage on the topic (a decision is for commands an operator gave), and so is a word
+        # repeated within REPEAT_S (a publisher stuck in a loop): one decision for it is enough.
+        word, now = msg.data.strip().lower(), rospy.get_time()
+        problem = choice_problem(word, OPERATOR_COMMANDS, "command")
+        if not problem and self.last_command[0] == word and 0.0 <= now - self.last_command[1] < REPEAT_S:
+            problem = ("repeated", "%r again %.2f s after the last one" % (word, now - self.last_command[1]))
         if problem:
             return self._dropped("operator/command", problem)
+        self.last_command = (word, now)
         self._command(msg.data)
 
     def _service(self, name):

@@ -51,6 +51,13 @@ class FaultInjector:
         self._lock = threading.Lock()
         self._subscribers = {}  # topic -> rospy.Subscriber (AnyMsg)
 
+    def prepare(self, names):
+        """Subscribe now to what tells the nodes ``names`` are back: a subscription made at the kill would need the
+        master, which may be dead by then (rospy then waits for it for ever)."""
+        for name in names:
+            for topic in RECOVERY_TOPICS.get(name.strip("/"), []):
+                self._watch(topic)
+
     def kill(self, name, signal_name, t_sim):
         name = name.strip("/")
         nodes = processes.nodes_below(self.roots())
@@ -62,8 +69,6 @@ class FaultInjector:
             record.error = "no process of node %r in this run (nodes: %s)" % (name, ", ".join(sorted(nodes)))
             self.rospy.logwarn("kill_node: %s", record.error)
             return record
-        for topic in RECOVERY_TOPICS.get(name, []):
-            self._watch(topic)
         try:
             os.kill(pid, getattr(signal, "SIG" + signal_name))
         except ProcessLookupError:

@@ -37,10 +37,11 @@ EXCLUDED = {
     "/mujoco_sim/fault": "the tests' fault-injection hook (its valid messages are faults)",
 }
 NOT_NODES = ("/scenario_runner", "/flight_recorder", "/input_fuzzer", "/rosout")
-# Subscriptions that look only at a message's arrival (the supervisor's sensor watchdogs): garbage counts as
+# Subscriptions that look only at a message's arrival (the supervisor's and the station's sensor watchdogs): garbage counts as
 # a sign of life there, nothing to reject.
-ARRIVAL_ONLY = {("/supervisor", "/ardrone/bottom/camera_info"), ("/supervisor", "/ardrone/imu"),
-                ("/supervisor", "/ardrone/gps/odom"), ("/supervisor", "/ardrone/sonar_height")}
+ARRIVAL_ONLY = {(node, topic) for node in ("/supervisor", "/station")
+                for topic in ("/ardrone/bottom/camera_info", "/ardrone/imu", "/ardrone/gps/odom")} | \
+    {("/supervisor", "/ardrone/sonar_height")}
 BURST_FACTOR, BURST_S = 10.0, 1.0
 REJECTION_PERIOD_S = 5.0  # the nodes' throttle of a rejection line (input_check.RejectionLog, warn_period)
 READY_FILE, COUNTS_FILE = "fuzz_ready", "fuzz.json"
@@ -364,8 +365,8 @@ _KIND = re.compile(r"rejected input on (\S+) \[([^\]]+)\]")
 
 
 def summary(out_dir, warnings, cfg, period_s=REJECTION_PERIOD_S):
-    """What the fuzz sent and what the nodes said about it: ``warnings`` are (wall s, node, text) of the run's
-    WARN and worse log lines. Per topic: garbage sent by kind, the subscribers that logged a rejection naming
+    """What the fuzz sent and what the nodes said about it: ``warnings`` are (sim s, node, text) of the run's
+    WARN and worse log lines (stamped with the clock the nodes throttle on). Per topic: garbage sent by kind, the subscribers that logged a rejection naming
     it and those that never did; and every (node, kind of line) logged more often than once per ``period_s``
     (a rejection not throttled)."""
     try:
@@ -381,16 +382,16 @@ def summary(out_dir, warnings, cfg, period_s=REJECTION_PERIOD_S):
         topics[topic] = {"type": info["type"], "sent": info["sent"], "rejected_by": complained,
                          "never_rejected_by": sorted(set(expected) - set(complained)) if content else []}
     lines = {}
-    for wall, node, text in warnings:
+    for t, node, text in warnings:
         match = _KIND.search(text)
         key = (node, "%s [%s]" % match.groups() if match else _NUMBERS.sub("#", text)[:120])
-        lines.setdefault(key, []).append(wall)
+        lines.setdefault(key, []).append(t)
     unthrottled = []
-    for (node, what), walls in sorted(lines.items()):
-        span = walls[-1] - walls[0]
+    for (node, what), times in sorted(lines.items()):
+        span = max(times) - min(times)
         allowed = int(span / period_s) + 2  # the first line, one per period, and one for timing slack
-        if len(walls) > allowed:
-            unthrottled.append({"node": node, "line": what, "count": len(walls), "over_s": round(span, 1)})
+        if len(times) > allowed:
+            unthrottled.append({"node": node, "line": what, "count": len(times), "over_s": round(span, 1)})
     total = sum(n for info in sent["topics"].values() for n in info["sent"].values())
     return {"topics": topics, "skipped": sent["skipped"], "bursts": sent["bursts"], "messages_sent": total,
             "sim_time_fuzzed_s": round((sent["last_t"] or 0.0) - (sent["first_t"] or 0.0), 2)

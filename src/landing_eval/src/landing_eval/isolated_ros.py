@@ -107,6 +107,24 @@ def reconnect_subscribers(master, missing, timeout=2.0):
     return sent
 
 
+LOOPBACK_SHIM = "liblanding_loopback_bind.so"
+
+
+def loopback_environment(env):
+    """``env`` for a graph that listens on loopback only: ROS_IP=127.0.0.1 (the master, rospy, roscpp's TCPROS) and
+    the preloaded shim that keeps roscpp's XML-RPC server there too (landing_msgs/src/loopback_bind.c), found on
+    LD_LIBRARY_PATH (the built workspace's devel/lib)."""
+    env = dict(env, ROS_IP="127.0.0.1", LANDING_ROS_LOOPBACK="1")
+    env.pop("ROS_HOSTNAME", None)
+    for directory in env.get("LD_LIBRARY_PATH", "").split(":"):
+        shim = os.path.join(directory, LOOPBACK_SHIM)
+        if directory and os.path.isfile(shim):
+            preload = [p for p in env.get("LD_PRELOAD", "").split(":") if p and os.path.basename(p) != LOOPBACK_SHIM]
+            env["LD_PRELOAD"] = ":".join([shim] + preload)
+            break
+    return env
+
+
 class IsolatedProcess:
     """``command`` run against the master at ``master_uri``, in a new process group, its output in
     ``log_path``. Use as a context manager (from the thread that lives as long as the process should: it
@@ -118,8 +136,7 @@ class IsolatedProcess:
         self.process, self.interrupted = None, False
 
     def __enter__(self):
-        env = dict(os.environ, ROS_MASTER_URI=self.master_uri, ROS_HOSTNAME="127.0.0.1")
-        env.pop("ROS_IP", None)
+        env = loopback_environment(dict(os.environ, ROS_MASTER_URI=self.master_uri))
         self._log = open(self.log_path, "w")
         self.process = subprocess.Popen(self.command, env=env, stdout=self._log, stderr=subprocess.STDOUT,
                                         stdin=subprocess.DEVNULL, start_new_session=True,

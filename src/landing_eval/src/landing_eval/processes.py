@@ -160,3 +160,50 @@ def deaths_in_launch_log(text):
                     death["respawned"] = True
                     break
     return deaths
+
+
+def _listening_inodes():
+    """{socket inode: "address:port"} of every listening TCP socket (IPv4 and IPv6) on this machine."""
+    found = {}
+    for path, width in (("/proc/net/tcp", 8), ("/proc/net/tcp6", 32)):
+        raw = _read(path)
+        for line in (raw or b"").decode().splitlines()[1:]:
+            fields = line.split()
+            if len(fields) < 10 or fields[3] != "0A":  # 0A: LISTEN
+                continue
+            address, port = fields[1].split(":")
+            found[fields[9]] = "%s:%d" % (_address(address, width), int(port, 16))
+    return found
+
+
+def _address(hex_address, width):
+    """The text of an address as /proc/net/tcp{,6} writes it (little-endian 32-bit words)."""
+    import ipaddress
+    words = [hex_address[i:i + 8] for i in range(0, width, 8)]
+    raw = b"".join(bytes.fromhex(word)[::-1] for word in words)
+    address = ipaddress.ip_address(raw)
+    return str(address.ipv4_mapped or address) if address.version == 6 else str(address)
+
+
+def listening(pid):
+    """The TCP addresses ("address:port") process ``pid`` listens on."""
+    inodes = _listening_inodes()
+    addresses = []
+    try:
+        for fd in os.listdir("/proc/%d/fd" % pid):
+            try:
+                target = os.readlink("/proc/%d/fd/%s" % (pid, fd))
+            except OSError:
+                continue
+            if target.startswith("socket:[") and target[8:-1] in inodes:
+                addresses.append(inodes[target[8:-1]])
+    except OSError:
+        pass
+    return sorted(set(addresses))
+
+
+def is_loopback(address):
+    """Whether "address:port" is on the loopback interface."""
+    import ipaddress
+    host = address.rsplit(":", 1)[0]
+    return ipaddress.ip_address(host).is_loopback

@@ -9,6 +9,7 @@ launch ended, the simulation clock stopped) or never came up. A bag whose record
 import argparse
 import collections
 import contextlib
+import faulthandler
 import json
 import os
 import signal
@@ -79,6 +80,14 @@ def recorder_command(bag):
     return ["rosrun", "rosbag", "record", "--output-name=" + bag, "--lz4", "-e", regex, "__name:=" + RECORDER]
 
 
+def only_from(node, callback):
+    """A subscriber callback that hears only ``node`` (by the connection's caller id)."""
+    def heard(msg):
+        if (getattr(msg, "_connection_header", None) or {}).get("callerid") == node:
+            callback(msg)
+    return heard
+
+
 class EventSchedule:
     """Scenario events in sim-time order; ``due(t)`` pops those whose time has come."""
 
@@ -117,6 +126,7 @@ class FlightMonitor:
     def __init__(self, s, ros, recorders, core):
         import rosgraph
         import rospy
+        from geometry_msgs.msg import PoseStamped
         from landing_msgs.msg import PositionXYCommand, Touchdown
         from std_msgs.msg import String
         self.rospy, self.s, self.ros, self.recorders, self.core = rospy, s, ros, recorders, core
@@ -138,12 +148,19 @@ class FlightMonitor:
         self.recorder_deaths = []
         self._recorder_restart = None  # (new recorder, sim time) until it has subscribed again
         self.faults = faults.FaultInjector(rospy, self.process_roots)
-        rospy.Subscriber("ardrone/touchdown", Touchdown, self._on_touchdown)
-        rospy.Subscriber("platform_tracking/state", String, lambda m: setattr(self, "tracker_state", m.data))
-        rospy.Subscriber("supervisor/mode", String, lambda m: setattr(self, "supervisor_mode", m.data))
-        rospy.Subscriber("emergency/position", PositionXYCommand,
-                         lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)]))
-        rospy.Subscriber("supervisor/decisions", String, self._on_decision)
+        # Each topic is read from the node that owns it only: a scenario may publish garbage on it (fuzz:).
+        sim, sub = "/mujoco_sim", rospy.Subscriber
+        sub("ardrone/touchdown", Touchdown, only_from(sim, self._on_touchdown))
+        # Ground truth from the start (not once the drone is down): a subscription made later would need the master,
+        # which may be dead by then (kill_node master), and rospy then waits for it for ever.
+        sub("groundtruth/ardrone", PoseStamped, only_from(sim, lambda m: self._remember(self.drone_poses, m)))
+        sub("groundtruth/landing_pad", PoseStamped, only_from(sim, lambda m: self._remember(self.pad_poses, m)))
+        sub("platform_tracking/state", String,
+            only_from("/platform_tracking", lambda m: setattr(self, "tracker_state", m.data)))
+        sub("supervisor/mode", String, only_from("/supervisor", lambda m: setattr(self, "supervisor_mode", m.data)))
+        sub("emergency/position", PositionXYCommand, only_from(
+            "/emergency", lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)])))
+        sub("supervisor/decisions", String, only_from("/supervisor", self._on_decision))
         if s.get("fuzz"):
             from rosgraph_msgs.msg import Log
             rospy.Subscriber("rosout_agg", Log, self._on_log, queue_size=1000)
@@ -162,11 +179,6 @@ class FlightMonitor:
                 poses.popitem(last=False)
 
     def _on_touchdown(self, msg):
-        if self.touchdown is None:
-            # Ground truth is only read once the drone is down: two 50 Hz streams fewer during the flight.
-            from geometry_msgs.msg import PoseStamped
-            self.rospy.Subscriber("groundtruth/ardrone", PoseStamped, lambda m: self._remember(self.drone_poses, m))
-            self.rospy.Subscriber("groundtruth/landing_pad", PoseStamped, lambda m: self._remember(self.pad_poses, m))
         if self.touchdown is None or msg.header.stamp.to_sec() > self.touchdown.header.stamp.to_sec():
             self.touchdown = msg
 
@@ -181,8 +193,8 @@ class FlightMonitor:
             self.missions.emergency()
 
     def _on_log(self, msg):
-        if msg.level >= msg.WARN:
-            self.warnings.append((round(time.monotonic(), 3), msg.name, msg.msg))
+        if msg.level >= msg.WARN:  # (sim time: the nodes throttle their warnings on their clock)
+            self.warnings.append((round(msg.header.stamp.to_sec(), 3), msg.name, msg.msg))
 
     def _needed_topics(self):
         """Topics the analysis of the bag cannot do without."""
@@ -406,6 +418,7 @@ class FlightMonitor:
         sim_start = rospy.get_time()
         plan = self.s.get("missions")
         clock = {"t": rospy.get_time(), "wall": time.monotonic()}
+        self.faults.prepare([e["name"] for e in schedule.pending if e.get("fault") == "kill_node"])
         self._pause_end = None  # sim time the next mission may start
         while True:
             t = rospy.get_time()
@@ -492,6 +505,18 @@ class FlightMonitor:
         result["recorder_deaths"] = self.recorder_deaths
         return result
 
+    def leave_graph(self, timeout=10.0):
+        """rospy's shutdown, bounded: with the master gone a registration still retrying holds rospy's topic lock, and
+        the shutdown waits for it for ever."""
+        def shut_down():
+            self.faults.close()
+            self.rospy.signal_shutdown("scenario finished")
+        thread = threading.Thread(target=shut_down, name="leave_graph", daemon=True)
+        thread.start()
+        thread.join(timeout)
+        if thread.is_alive():
+            self.rospy.logwarn("rospy did not shut down within %.0f s (the master is gone?): leaving it behind", timeout)
+
     def resting_pad_error(self):
         """Horizontal drone-to-pad distance at the latest instant both poses are known for."""
         stamp = self._latest_common_stamp()
@@ -566,7 +591,8 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     events = s["events"] if no_operator or any("operator" in e for e in s["events"]) else \
         [{"at_s": 0.0, "operator": "landing"}] + s["events"]
     launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
-              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s)
+              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s) + \
+        (["station:=true"] if s["fuzz"] else [])  # garbage reaches the operator station's inputs too
     wall_start = time.monotonic()
     limits = wall_limits(s["time_limit_s"], wall_timeout)
     result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path),
@@ -598,7 +624,9 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             sim_start = monitor.rospy.get_time()
             wall_flight_start = time.monotonic()
             phases["start_up"] = wall_flight_start - wall_start
-            monitor.sample_resources("start", wall_start)
+            start = monitor.sample_resources("start", wall_start)
+            # Where each process of the graph listens (README, "Security": loopback unless asked otherwise).
+            result["listening"] = {name: processes.listening(info["pid"]) for name, info in start["nodes"].items()}
             error, aborted = None, False
             try:
                 monitor.run(EventSchedule(events), s["time_limit_s"], wall_flight_start + limits["flight"], wall_start)
@@ -619,8 +647,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             result.update(monitor.scored(error, aborted, sim_start, sim_time, phases["flight"]))
             if fuzzer is not None:
                 result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
-            monitor.faults.close()
-            monitor.rospy.signal_shutdown("scenario finished")
+            monitor.leave_graph()
     except Exception as err:  # noqa: BLE001 (whatever went wrong, the run leaves its result and the reason)
         # The graph never came up (or the run could not even start): still a result, with the reason.
         result.update(outcome="aborted", error="%s: %s" % (type(err).__name__, err), touchdown_error_m=None,
@@ -680,6 +707,8 @@ def main(argv=None):
                              "single keys the scenario overrides stay overridden")
     args = parser.parse_args(argv)
     stop_on_sigterm()
+    # `kill -USR1 PID` prints where every thread of a run that seems stuck is (to stderr, the run's log).
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     try:
         result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack,
                      supervisor=not args.no_supervisor, realism=args.realism)

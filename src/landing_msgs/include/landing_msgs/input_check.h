@@ -3,8 +3,8 @@
 //   landing_msgs::RejectionLog rejections;
 //   if (auto problem = landing_msgs::stampProblem(msg->header.stamp, ros::Time::now()))
 //     return rejections.reject(topic, *problem);
-// Each kind of problem on each topic is logged once per period (wall time) with what was wrong and how many
-// more were dropped since the last line.
+// Each kind of problem on each topic is logged once per period of the node's clock (sim time under the simulator,
+// as ROS_WARN_THROTTLE) with what was wrong and how many more were dropped since the last line.
 #pragma once
 
 #include <cmath>
@@ -77,13 +77,13 @@ class RejectionLog {
   /// Drop a message on ``topic`` for ``problem``: logged at once, then once per period with the count.
   void reject(const std::string& topic, const InputProblem& problem) {
     const auto key = std::make_pair(topic, problem.kind);
-    const double now = ros::WallTime::now().toSec();
+    const double now = ros::Time::now().toSec();
     int more = 0;
     double since = 0.0;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       Entry& entry = entries_[key];
-      if (entry.logged && now - entry.last < period_s_) {
+      if (entry.logged && now >= entry.last && now - entry.last < period_s_) {  // a clock gone back logs at once
         ++entry.dropped;
         return;
       }

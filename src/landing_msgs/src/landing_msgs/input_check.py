@@ -33,7 +33,7 @@ MAX_FUTURE_S = 0.5
 MAX_AGE_S = 2.0
 
 KINDS = ("non-finite", "out of range", "stamp from the future", "stamp from the past", "wrong frame", "empty",
-         "malformed", "unknown value")
+         "malformed", "unknown value", "repeated")
 
 
 def numbers_problem(limit=math.inf, **named):
@@ -92,8 +92,9 @@ def first_problem(*problems):
 
 
 class RejectionLog:
-    """Logs dropped messages once per (topic, kind) every ``period_s`` of wall time, with the detail of the first
-    one and the number dropped since the last line. ``warn(text)`` writes the line (rospy.logwarn); thread-safe."""
+    """Logs dropped messages once per (topic, kind) every ``period_s`` of ``clock()`` (the node's clock: sim time
+    under the simulator, as rospy's and roscpp's throttled logging), with the detail of the first one and the
+    number dropped since the last line. ``warn(text)`` writes the line (rospy.logwarn); thread-safe."""
 
     def __init__(self, warn, period_s=5.0, clock=time.monotonic):
         self.warn, self.period_s, self.clock = warn, period_s, clock
@@ -111,7 +112,7 @@ class RejectionLog:
         with self._lock:
             self.counts[key] = self.counts.get(key, 0) + 1
             last = self._last.get(key)
-            if last is not None and now - last < self.period_s:
+            if last is not None and 0.0 <= now - last < self.period_s:  # (a clock gone back logs at once)
                 self._dropped[key] = self._dropped.get(key, 0) + 1
                 return None
             more = self._dropped.pop(key, 0)
@@ -126,7 +127,8 @@ class RosRejectionLog(RejectionLog):
 
     def __init__(self, period_s=5.0):
         import rospy
-        super().__init__(lambda text: rospy.logwarn(text), period_s)  # looked up at each call (tests replace it)
+        # rospy's functions are looked up at each call (tests replace them)
+        super().__init__(lambda text: rospy.logwarn(text), period_s, clock=lambda: rospy.get_time())
         self._rospy = rospy
 
     def reject(self, topic, problem):

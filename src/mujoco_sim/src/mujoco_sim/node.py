@@ -79,7 +79,7 @@ class SimNode:
         self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
         lockstep = self.cfg["lockstep"]
-        self.rejections = RosRejectionLog()  # garbage on lockstep_ack: what was wrong, once per kind
+        self.rejections = RosRejectionLog()  # garbage on the inputs: what was wrong, once per topic and kind
         self.lockstep = LockstepGate(lockstep["max_lead_s"], lockstep["stale_after_wall_s"], log=rospy.loginfo) \
             if lockstep["enabled"] else None
         self.conditions = {}
@@ -193,8 +193,9 @@ class SimNode:
     def _on_cmd_vel(self, msg):
         problem = self.sim.set_velocity_command(msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.z)
         if problem:
-            rospy.logwarn_throttle(2.0, "ignored /ardrone/cmd_vel with %s: the drone holds its position; "
-                                        "send finite velocities in m/s and rad/s" % problem)
+            self.rejections.reject("ardrone/cmd_vel", ("non-finite" if "non-finite" in problem else "out of range",
+                                                       "%s: the drone holds its position; send finite velocities in "
+                                                       "m/s and rad/s" % problem))
 
     def _on_fault(self, msg):
         """JSON {"fault": "camera_blackout" | "detection_false_target", "duration_s": seconds}."""
@@ -213,8 +214,9 @@ class SimNode:
     def _on_vehicle_cmd(self, msg):
         problem = self.sim.set_vehicle_command(msg.linear.x, msg.angular.z)
         if problem:
-            rospy.logwarn_throttle(2.0, "ignored /summit_xl_control/cmd_vel with %s: the vehicle stops; "
-                                        "send finite speeds in m/s and rad/s" % problem)
+            self.rejections.reject("summit_xl_control/cmd_vel", (
+                "non-finite" if "non-finite" in problem else "out of range",
+                "%s: the vehicle stops; send finite speeds in m/s and rad/s" % problem))
 
     # ----- loop ----------------------------------------------------------------------------------
     def _wait_for_start_signal(self):

@@ -360,11 +360,17 @@ class TrackingNode:
         if problem:
             return self.rejections.reject("kalman_prediction_path", problem)
         times = [s.header.stamp.to_sec() for s in msg.poses]
-        if any(t <= 0.0 for t in times) or any(b <= a for a, b in zip(times, times[1:])):
+        if all(t == 0.0 for t in times):
             # Without per-pose times only the first pose (stamped with the message) can be used.
-            rospy.logwarn_throttle(WARN_PERIOD * 6, "%s: poses are not stamped with increasing future times; "
+            rospy.logwarn_throttle(WARN_PERIOD * 6, "%s: poses are not stamped with their future times; "
                                    "using only the first" % rospy.resolve_name("kalman_prediction_path"))
             times, positions = [stamp_of(msg)], positions[:1]
+        elif any(b <= a for a, b in zip(times, times[1:])) or \
+                stamp_problem(times[0], rospy.get_time()):  # the first pose is now (conventions.md)
+            # Which pose is when is unknown: using any would put the pad seconds away from where it is.
+            return self.rejections.reject("kalman_prediction_path", (
+                "malformed", "pose times %s are not now and on into the future" % ", ".join(
+                    "%.2f" % t for t in times[:4])))
         with self.lock:
             self.path = (times, positions)
             self.prediction = None
