@@ -19,7 +19,9 @@ node, tagged with ~launch_id (unique to each roslaunch, kept across respawns); a
 import json
 import sys
 import threading
+import time
 
+import rosgraph
 from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem, first_problem,
                                       frame_problem, numbers_problem, stamp_problem)
 from platform_tracking.state_machine import State as TrackerState
@@ -45,6 +47,7 @@ SERVICES = ("landing", "emergency", "manual", "continue")
 TRACKER_STATES = tuple(state.value for state in TrackerState)
 NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes
 WORLD_FRAME, BODY_FRAME = "world", "ardrone/base_link"  # docs/conventions.md
+DECISIONS_WAIT_S = 3.0  # wall seconds decisions wait at the start for supervisor/decisions' subscribers to connect
 REPEAT_S = 2.0  # the same operator word again within this (sim) time is a repetition, not a new command [s]
 NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
     "rate_hz": (5.0, 200.0),
@@ -104,6 +107,8 @@ class SupervisorNode:
         self.core = Supervisor(self.table, settings, log=self._log, touchdown_judge=self.touchdown)
         self.saved_snapshot = None
         self.launch_id = rospy.get_param("~launch_id", None)  # one roslaunch's, kept across respawns
+        self.unsent = []  # decisions waiting for the subscribers of supervisor/decisions (_listened_to)
+        self.decisions_wait_until = time.monotonic() + DECISIONS_WAIT_S
         # Before any subscription: an operator command arriving first would save a fresh state over the old one.
         self._recover()
         self.watchdog = SensorWatchdog(SENSOR_TOPICS)
@@ -177,6 +182,22 @@ class SupervisorNode:
             self.saved_snapshot = snapshot
         except Exception as err:  # the master is gone: the flight goes on, a restart would start afresh
             rospy.logwarn_throttle(30.0, "supervisor: cannot save its state for a restart: %s" % err)
+
+    def _listened_to(self):
+        """Whether supervisor/decisions (not latched) reaches its subscribers. Right after a restart they are still
+        connecting, and the decision that says the supervisor carried on would be lost: decisions wait until every
+        subscriber the master lists is connected, for at most DECISIONS_WAIT_S of wall time after the start."""
+        if self.decisions_wait_until is None:
+            return True
+        if time.monotonic() < self.decisions_wait_until:
+            try:
+                subscribers = dict(rosgraph.Master(rospy.get_name()).getSystemState()[1])
+                if self.pub_decisions.get_num_connections() < len(subscribers.get(self.pub_decisions.resolved_name, [])):
+                    return False
+            except Exception:  # the master is gone: nothing more will connect
+                pass
+        self.decisions_wait_until = None
+        return True
 
     def _dropped(self, topic, problem):
         return self.rejections.reject(topic, problem)
@@ -288,8 +309,11 @@ class SupervisorNode:
     # ----- outputs -----------------------------------------------------------------------------------
     def _publish(self, t=None):
         decisions, tracker_commands = self.core.take_outputs()
-        for decision in decisions:
-            self.pub_decisions.publish(String(data=json.dumps(decision.as_dict())))
+        self.unsent += decisions
+        if self.unsent and self._listened_to():
+            for decision in self.unsent:
+                self.pub_decisions.publish(String(data=json.dumps(decision.as_dict())))
+            self.unsent = []
         for command in tracker_commands:
             self.pub_tracker.publish(String(data=command))
         mode = self.core.mode.value
