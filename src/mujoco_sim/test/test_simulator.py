@@ -393,9 +393,28 @@ def test_the_realistic_camera_is_distorted_wider_rendered_and_its_brightness_wan
     assert image.shape == (240, 320, 3)
     assert sim.lens.render_fovy_deg > sim.camera_fovy  # barrel distortion: the corners see further out
     assert sim.camera_distortion()[0] == pytest.approx(-0.2)
+    # The sun (a light that travels with the drone) shines from where the seed put it, 1 m towards it.
+    assert sim.data.light_xdir[0] == pytest.approx(sim.sun_direction, abs=1e-6)
+    assert sim.data.light_xpos[0] - sim.drone_pose()[0] == pytest.approx(-sim.sun_direction, abs=1e-6)
     gains = [sim.exposure.gain(t) for t in np.arange(0.0, 300.0, 0.5)]
     assert 0.05 < np.std(np.log(gains)) < 0.3
     ideal = make_sim(realism="ideal")
     run(ideal, 0.2)
     ideal.render_camera()
     assert ideal.lens.identity and ideal.exposure.gain(10.0) == 1.0
+
+
+def test_a_surface_step_under_the_sonar_moves_the_firmware_height_not_the_drone():
+    """Flying off a car's roof the sonar's surface drops 1.7 m: the firmware takes the new height, and its
+    altitude hold keeps the drone's altitude instead of diving after the old height above the surface."""
+    from mujoco_sim.firmware import FirmwareEstimator
+    sim = make_sim(realism="realistic")
+    fw = FirmwareEstimator(sim.cfg["firmware"])
+    steps = [fw.sonar(k * 0.04, 0.04, 2.2, 4.0) for k in range(10)]
+    assert not any(steps) and fw.height == pytest.approx(2.2, abs=0.01)
+    steps = [fw.sonar(0.4 + k * 0.04, 0.04, 3.9, 4.0) for k in range(10)]
+    assert sum(steps) == pytest.approx(1.7, abs=0.01) and steps[0] == 0.0  # an outlier at first, then a step
+    assert fw.height == pytest.approx(3.9, abs=0.01)
+    sim.autopilot.z_ref = 2.2
+    sim.autopilot.shift_altitude_reference(1.7)
+    assert sim.autopilot.z_ref == pytest.approx(3.9)

@@ -296,6 +296,18 @@ def test_landing_stops_descending_while_the_error_or_relative_speed_is_too_large
     assert out.command.vz == 0.0
 
 
+def test_landing_descends_on_through_the_flows_blend_over_a_fast_vehicle():
+    """Where the drone's own velocity half follows the vehicle (flow weight 0.1-0.9) over a car, an error that
+    would hold the height elsewhere does not: holding there only lets it grow."""
+    for weight, speed, expected in ((0.5, 15.0, -P.blend_descent_rate), (0.0, 15.0, 0.0), (0.5, 2.0, 0.0)):
+        f = landing_flight(height=2.5)
+        t = f.t + 1 / 30  # the drone 0.5 m behind the pad: above descend_max_error, below the climbing error
+        out = f.step(drone=drone(x=speed * t - 0.5, height=2.5, vx=speed), pad=pad(t, x=speed * t, vx=speed),
+                     flow_weight=weight)
+        assert f.state == State.LANDING, (weight, speed)
+        assert out.command.vz == pytest.approx(expected), (weight, speed)
+
+
 def test_landing_climbs_while_the_error_is_too_large_for_its_height_then_descends_again():
     f = landing_flight(height=1.0)
     limit = P.hold_max_error + P.hold_error_per_metre * 1.0    # the narrower view lower down

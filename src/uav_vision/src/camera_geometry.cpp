@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <opencv2/calib3d.hpp>
+
 namespace uav_vision {
 
 std::string CameraIntrinsics::problem() const {
@@ -14,7 +16,47 @@ std::string CameraIntrinsics::problem() const {
     out << "focal length must be positive (fx=" << fx << ", fy=" << fy << ")";
   else if (width <= 0 || height <= 0)
     out << "image size must be positive (" << width << "x" << height << ")";
+  else if (!std::all_of(distortion.begin(), distortion.end(), [](double v) { return std::isfinite(v); }))
+    out << "non-finite lens distortion";
   return out.str();
+}
+
+bool CameraIntrinsics::distorted() const {
+  return std::any_of(distortion.begin(), distortion.end(), [](double v) { return v != 0.0; });
+}
+
+bool CameraIntrinsics::operator==(const CameraIntrinsics& o) const {
+  return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && width == o.width && height == o.height &&
+         distortion == o.distortion;
+}
+
+LensUndistortion::LensUndistortion(const CameraIntrinsics& intrinsics) : intrinsics_(intrinsics) {
+  const int w = intrinsics.width, h = intrinsics.height;
+  table_.resize(size_t(std::max(w, 0)) * size_t(std::max(h, 0)));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) table_[size_t(y) * w + x] = cv::Point2f(float(x), float(y));
+  if (!intrinsics.distorted() || table_.empty() || !intrinsics.problem().empty()) return;
+  const cv::Matx33d k(intrinsics.fx, 0.0, intrinsics.cx, 0.0, intrinsics.fy, intrinsics.cy, 0.0, 0.0, 1.0);
+  // Iterated to convergence: OpenCV's default 5 iterations leave tenths of a pixel in the corners.
+  std::vector<cv::Point2f> ideal;
+  cv::undistortPoints(table_, ideal, k, intrinsics.distortion, cv::noArray(), k,
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-6));
+  table_.swap(ideal);
+}
+
+void LensUndistortion::undistort(const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& ideal) const {
+  ideal.resize(pixels.size());
+  for (size_t i = 0; i < pixels.size(); ++i) ideal[i] = undistort(pixels[i]);
+}
+
+cv::Point2d distortPixel(const CameraIntrinsics& k, const cv::Point2d& ideal) {
+  const auto& [k1, k2, p1, p2, k3] = k.distortion;
+  const double x = (ideal.x - k.cx) / k.fx, y = (ideal.y - k.cy) / k.fy;
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+  const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+  return {k.fx * xd + k.cx, k.fy * yd + k.cy};
 }
 
 CameraMount CameraMount::bottomCamera(double below_base_link) {

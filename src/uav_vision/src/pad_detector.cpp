@@ -58,10 +58,12 @@ struct PlaneSegment {
 };
 
 // Straight pieces of a closed outline that are away from the image border: the outline is cut into
-// runs between border points, each run into straight pieces by approxPolyDP, and a line is fitted on
-// the plane to each piece's middle (its ends round off at corners).
-std::vector<PlaneSegment> planeSegments(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& plane,
-                                        const cv::Size& size, const PadDetectorParams& params) {
+// runs between border points, each run into straight pieces by approxPolyDP (in ideal pixels, where a
+// straight edge is straight), and a line is fitted on the plane to each piece's middle (its ends round
+// off at corners). `outline` in image pixels (for the border), `ideal` and `plane` the same points.
+std::vector<PlaneSegment> planeSegments(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                                        const std::vector<cv::Point2f>& plane, const cv::Size& size,
+                                        const PadDetectorParams& params) {
   std::vector<PlaneSegment> segments;
   const int n = static_cast<int>(outline.size());
   int first_border = -1;
@@ -76,12 +78,11 @@ std::vector<PlaneSegment> planeSegments(const std::vector<cv::Point>& outline, c
       runs.back().push_back(i);
     }
   }
-  std::vector<cv::Point> run_points, vertices;
-  std::vector<cv::Point2f> piece;
+  std::vector<cv::Point2f> run_points, vertices, piece;
   for (const auto& run : runs) {
     if (run.size() < params.min_edge_length_px) continue;
     run_points.clear();
-    for (int i : run) run_points.push_back(outline[i]);
+    for (int i : run) run_points.push_back(ideal[i]);
     cv::approxPolyDP(run_points, vertices, 2.0, false);
     // approxPolyDP keeps a subset of the run's points in order: find their indices.
     std::vector<size_t> vertex_index;
@@ -155,11 +156,8 @@ std::string PadDetector::validate(const PadDetectorParams& p) {
   if (!(p.pad.strip_length > 0.0 && p.pad.strip_width > 0.0 && p.pad.strip_length < p.pad.side))
     return "strip length and width must be positive and the strip inside the pad";
   if (!(std::abs(p.pad.strip_offset) + p.pad.strip_width / 2 < p.pad.side / 2)) return "strip_offset puts the strip off the pad";
-  if (!in(p.red_hue_low_max, 0, 179) || !in(p.red_hue_high_min, 0, 180)) return "red hue limits must be in [0, 180]";
-  if (!in(p.green_hue_min, 0, 180) || !in(p.green_hue_max, p.green_hue_min, 180))
-    return "green hue range must satisfy 0 <= green_hue_min <= green_hue_max <= 180";
-  for (int v : {p.red_saturation_min, p.red_value_min, p.green_saturation_min, p.green_value_min})
-    if (!in(v, 0, 255)) return "saturation and value minima must be in [0, 255]";
+  for (int v : {p.red_margin_min, p.green_margin_min})
+    if (!in(v, 1, 255)) return "red_margin_min and green_margin_min must be in [1, 255]";
   if (!in(p.morphology_kernel_px, 1, 15)) return "morphology_kernel_px must be in [1, 15]";
   if (!in(p.min_area_px, 1, 1e6)) return "min_area_px must be in [1, 1e6]";
   if (!in(p.min_solidity, 0, 1)) return "min_solidity must be in [0, 1]";
@@ -173,51 +171,89 @@ std::string PadDetector::validate(const PadDetectorParams& p) {
   if (!in(p.fit_tolerance_m, 0.001, 0.5 * p.pad.side)) return "fit_tolerance_m must be in [0.001, pad side / 2]";
   if (!in(p.min_strip_area_px, 1, 1e6)) return "min_strip_area_px must be in [1, 1e6]";
   if (!in(p.min_partial_support_px, 0.0, 1000.0)) return "min_partial_support_px must be in [0, 1000]";
+  if (!in(p.min_partial_coverage, 0.0, 1.0)) return "min_partial_coverage must be in [0, 1]";
+  if (!in(p.min_corner_image_share, 0.0, 1.0)) return "min_corner_image_share must be in [0, 1]";
+  if (!in(p.max_off_edge_share, 0.0, 1.0)) return "max_off_edge_share must be in [0, 1]";
+  if (!in(p.edge_gap_tolerance, 0.0, 0.9)) return "edge_gap_tolerance must be in [0, 0.9]";
   if (!(p.pad.marker_side > 0.0 && p.pad.marker_side / 2 < std::abs(p.pad.strip_offset) - p.pad.strip_width / 2))
     return "marker_side must be positive and the centre marker clear of the strip";
-  if (!in(p.marker_saturation_max, 0, 255) || !in(p.marker_value_min, 0, 255))
-    return "marker_saturation_max and marker_value_min must be in [0, 255]";
+  if (!in(p.marker_chroma_max, 0, 255) || !in(p.marker_value_min, 0, 255))
+    return "marker_chroma_max and marker_value_min must be in [0, 255]";
   if (!in(p.marker_min_surround, 0, 1)) return "marker_min_surround must be in [0, 1]";
   return "";
 }
 
-void PadDetector::computeMasks(const cv::Mat& image, ColorOrder order) const {
+void PadDetector::computeMasks(const cv::Mat& image, ColorOrder order, double max_marker_area_px) const {
   const auto& p = params_;
-  cv::cvtColor(image, hsv_, order == ColorOrder::kRgb ? cv::COLOR_RGB2HSV : cv::COLOR_BGR2HSV);
-  // Thresholds on the separate planes: 3-channel cv::inRange costs three times as much.
-  cv::split(hsv_, planes_);
-  const cv::Mat &hue = planes_[0], &saturation = planes_[1], &value = planes_[2];
-  // Red: hue outside (red_hue_low_max, red_hue_high_min), i.e. around 0/180.
-  cv::inRange(hue, p.red_hue_low_max + 1, p.red_hue_high_min - 1, not_red_hue_);
-  cv::threshold(saturation, red_colour_, p.red_saturation_min - 1, 255, cv::THRESH_BINARY);
-  cv::threshold(value, bright_, p.red_value_min - 1, 255, cv::THRESH_BINARY);
-  cv::bitwise_and(red_colour_, bright_, red_colour_);
-  cv::subtract(red_colour_, not_red_hue_, red_colour_);  // saturating: clears the non-red hues
-  cv::inRange(hue, p.green_hue_min, p.green_hue_max, strip_mask_);
-  cv::threshold(saturation, bright_, p.green_saturation_min - 1, 255, cv::THRESH_BINARY);
-  cv::bitwise_and(strip_mask_, bright_, strip_mask_);
-  cv::threshold(value, bright_, p.green_value_min - 1, 255, cv::THRESH_BINARY);
-  cv::bitwise_and(strip_mask_, bright_, strip_mask_);
+  cv::split(image, planes_);
+  const cv::Mat& r = planes_[order == ColorOrder::kRgb ? 0 : 2];
+  const cv::Mat& g = planes_[1];
+  const cv::Mat& b = planes_[order == ColorOrder::kRgb ? 2 : 0];
+  // Saturating 8-bit arithmetic: a margin below zero is zero.
+  cv::max(g, b, max_of_two_);
+  cv::subtract(r, max_of_two_, margin_);
+  cv::threshold(margin_, red_colour_, p.red_margin_min - 1, 255, cv::THRESH_BINARY);
+  cv::max(max_of_two_, r, channel_max_);
+  cv::max(r, b, max_of_two_);
+  cv::subtract(g, max_of_two_, margin_);
+  cv::threshold(margin_, strip_mask_, p.green_margin_min - 1, 255, cv::THRESH_BINARY);
   // The strip lies inside the pad: counting it as pad keeps the outline a square when the strip is cut
   // by the image border.
   cv::bitwise_or(red_colour_, strip_mask_, pad_mask_);
+  // A pixel takes the class of most of its 3x3 neighbourhood: the sensor noise's specks go, and so do
+  // the pinholes it leaves in a dark (shadowed, under-exposed) part of the pad. The pad's vote counts
+  // the strip as pad: where red and green meet, neither alone has the majority.
+  cv::medianBlur(pad_mask_, pad_mask_, 3);
+  cv::medianBlur(red_colour_, red_colour_, 3);
+  cv::medianBlur(strip_mask_, strip_mask_, 3);
   if (p.morphology_kernel_px > 1) {
     cv::morphologyEx(pad_mask_, pad_mask_, cv::MORPH_OPEN, kernel_);
     cv::morphologyEx(strip_mask_, strip_mask_, cv::MORPH_OPEN, kernel_);
   }
-  // The white centre marker lies inside the pad too: filled in, it leaves neither a hole nor, when the
-  // image border cuts it, a notch whose straight sides would pass for pad edges.
-  cv::threshold(saturation, marker_mask_, p.marker_saturation_max, 255, cv::THRESH_BINARY_INV);
-  cv::threshold(value, bright_, p.marker_value_min - 1, 255, cv::THRESH_BINARY);
-  cv::bitwise_and(marker_mask_, bright_, marker_mask_);
+  // The white centre marker lies inside the pad too: where the image border cuts it, filled in, it leaves
+  // no notch whose straight sides would pass for pad edges (a hole inside does not change the outline).
+  cv::min(g, b, channel_min_);
+  cv::min(channel_min_, r, channel_min_);
+  cv::subtract(channel_max_, channel_min_, margin_);  // the chroma
+  cv::threshold(margin_, marker_mask_, p.marker_chroma_max, 255, cv::THRESH_BINARY_INV);
+  cv::threshold(channel_min_, channel_min_, p.marker_value_min - 1, 255, cv::THRESH_BINARY);
+  cv::bitwise_and(marker_mask_, channel_min_, marker_mask_);
+  cv::medianBlur(marker_mask_, marker_mask_, 3);
   if (p.morphology_kernel_px > 1) cv::morphologyEx(marker_mask_, marker_mask_, cv::MORPH_OPEN, kernel_);
   cv::findContours(marker_mask_, white_blobs_, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
   white_blob_red_share_.assign(white_blobs_.size(), 0.0);
   for (size_t i = 0; i < white_blobs_.size(); ++i) {
-    white_blob_red_share_[i] = redShareAround(white_blobs_[i], image.size());
-    if (white_blob_red_share_[i] >= p.marker_min_surround)
+    const auto& blob = white_blobs_[i];
+    const double area = cv::contourArea(blob);
+    // Grey ground (as grey-white as the marker in some light) is larger than the marker's image.
+    white_blob_red_share_[i] = area <= max_marker_area_px ? redShareAround(blob, image.size()) : 0.0;
+    // A marker cut by the image border meets one side of the image. Ground between a convex pad and the
+    // border, as grey-white as the marker in some light, meets two (it holds a corner of the image), as
+    // does a marker in a corner of the image: that one is the brighter, white beside the red in the
+    // same light (the ground's grey is about half as bright as the red's R channel).
+    const double m = p.border_margin_px;
+    int sides = 0;
+    sides += std::any_of(blob.begin(), blob.end(), [&](const cv::Point& q) { return q.x <= m; });
+    sides += std::any_of(blob.begin(), blob.end(), [&](const cv::Point& q) { return q.y <= m; });
+    sides += std::any_of(blob.begin(), blob.end(), [&](const cv::Point& q) { return q.x >= image.cols - 1 - m; });
+    sides += std::any_of(blob.begin(), blob.end(), [&](const cv::Point& q) { return q.y >= image.rows - 1 - m; });
+    if (sides == 0 || white_blob_red_share_[i] < p.marker_min_surround) continue;
+    if (sides == 1 || (sides == 2 && brighterThanTheRedAround(blob, r)))
       cv::drawContours(pad_mask_, white_blobs_, int(i), cv::Scalar(255), cv::FILLED);
   }
+}
+
+bool PadDetector::brighterThanTheRedAround(const std::vector<cv::Point>& blob, const cv::Mat& red_channel) const {
+  const cv::Rect inner = cv::boundingRect(blob) & cv::Rect(cv::Point(), red_channel.size());
+  const int margin = std::max(2, int(std::round(0.3 * std::sqrt(std::max(double(inner.area()), 1.0)))));
+  const cv::Rect band = (inner + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
+                        cv::Rect(cv::Point(), red_channel.size());
+  cv::Mat inside(band.size(), CV_8U, cv::Scalar(0));
+  cv::drawContours(inside, std::vector<std::vector<cv::Point>>{blob}, 0, cv::Scalar(255), cv::FILLED, cv::LINE_8,
+                   cv::noArray(), 0, -band.tl());
+  const double blob_r = cv::mean(red_channel(band), inside)[0];
+  const double red_r = cv::mean(red_channel(band), red_colour_(band))[0];
+  return blob_r >= 0.8 * red_r;
 }
 
 double PadDetector::redShareAround(const std::vector<cv::Point>& blob, const cv::Size& size) const {
@@ -256,10 +292,18 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
       return result;
     }
   }
-  computeMasks(image, order);
+  frame_lens_ = lensOf(view);
+  // The marker's image is at most about this large (a tilt enlarges it by tens of per cent); without the
+  // view its size is unknown, and a marker is not looked for.
+  const double marker_px =
+      view ? 1.3 * std::max(view->intrinsics().fx, view->intrinsics().fy) * params_.pad.marker_side / view->cameraHeight()
+           : 0.0;
+  computeMasks(image, order, marker_px * marker_px);
   std::vector<std::vector<cv::Point>> outlines;
   cv::findContours(pad_mask_, outlines, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
   cv::findContours(strip_mask_, strip_outlines_, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  strip_ideal_.resize(strip_outlines_.size());
+  for (size_t i = 0; i < strip_outlines_.size(); ++i) toIdeal(strip_outlines_[i], strip_ideal_[i]);
 
   result.reason = "no red region";
   double rejected_area = 0.0;
@@ -267,7 +311,8 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
   for (const auto& outline : outlines) {
     const double area = cv::contourArea(outline);
     if (area < params_.min_area_px) continue;
-    Candidate candidate = evaluate(outline, size, view);
+    toIdeal(outline, ideal_);
+    Candidate candidate = evaluate(outline, ideal_, size, view);
     const Detection& d = candidate.detection;
     if (candidate.ok) {
       if (!result.found || d.quality > result.quality) result = d;
@@ -299,18 +344,34 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
   return result;
 }
 
-PadDetector::Candidate PadDetector::evaluate(const std::vector<cv::Point>& outline, const cv::Size& size,
+const LensUndistortion* PadDetector::lensOf(const PlaneView* view) const {
+  if (!view || !view->intrinsics().distorted()) return nullptr;
+  if (!lens_ || lens_->intrinsics() != view->intrinsics()) lens_ = std::make_shared<const LensUndistortion>(view->intrinsics());
+  return lens_.get();
+}
+
+void PadDetector::toIdeal(const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& ideal) const {
+  if (frame_lens_) {
+    frame_lens_->undistort(pixels, ideal);
+  } else {
+    ideal.resize(pixels.size());
+    for (size_t i = 0; i < pixels.size(); ++i) ideal[i] = cv::Point2f(float(pixels[i].x), float(pixels[i].y));
+  }
+}
+
+PadDetector::Candidate PadDetector::evaluate(const std::vector<cv::Point>& outline,
+                                             const std::vector<cv::Point2f>& ideal, const cv::Size& size,
                                              const PlaneView* view) const {
   Candidate candidate;
   const bool touches_border = std::any_of(outline.begin(), outline.end(), [&](const cv::Point& p) {
     return onBorder(p, size, params_.border_margin_px);
   });
   if (!touches_border) {
-    candidate.ok = evaluateWhole(outline, view, candidate);
+    candidate.ok = evaluateWhole(outline, ideal, view, candidate);
   } else if (!view) {
     candidate.detection.reason = "pad cut by the image border and no camera geometry to complete it";
   } else {
-    candidate.ok = evaluatePartial(outline, size, *view, candidate);
+    candidate.ok = evaluatePartial(outline, ideal, size, *view, candidate);
   }
   if (candidate.ok) {
     candidate.detection.found = true;
@@ -319,33 +380,33 @@ PadDetector::Candidate PadDetector::evaluate(const std::vector<cv::Point>& outli
   return candidate;
 }
 
-const std::vector<cv::Point>* PadDetector::findStrip(const std::vector<cv::Point>& outline) const {
-  const std::vector<cv::Point>* best = nullptr;
+int PadDetector::findStrip(const std::vector<cv::Point>& outline) const {
+  int best = -1;
   double best_area = params_.min_strip_area_px;
-  for (const auto& strip : strip_outlines_) {
-    const cv::Moments m = cv::moments(strip);
+  for (size_t i = 0; i < strip_outlines_.size(); ++i) {
+    const cv::Moments m = cv::moments(strip_outlines_[i]);
     if (m.m00 < best_area) continue;
     const cv::Point2f centroid(float(m.m10 / m.m00), float(m.m01 / m.m00));
     if (cv::pointPolygonTest(outline, centroid, false) < 0) continue;
-    best = &strip;
+    best = int(i);
     best_area = m.m00;
   }
   return best;
 }
 
-bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const PlaneView* view,
-                                Candidate& candidate) const {
+bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                                const PlaneView* view, Candidate& candidate) const {
   const auto& p = params_;
   Detection& d = candidate.detection;
-  const double area = cv::contourArea(outline);
-  std::vector<cv::Point> hull;
-  cv::convexHull(outline, hull);
+  const double area = cv::contourArea(ideal);
+  std::vector<cv::Point2f> hull;
+  cv::convexHull(ideal, hull);
   const double solidity = area / std::max(cv::contourArea(hull), 1e-9);
   if (solidity < p.min_solidity) {
     d.reason = format("red region not convex (solidity %.2f < %.2f)", solidity, p.min_solidity);
     return false;
   }
-  std::vector<cv::Point> quad;
+  std::vector<cv::Point2f> quad;
   cv::approxPolyDP(hull, quad, p.approx_epsilon * cv::arcLength(hull, true), true);
   if (quad.size() != 4 || !cv::isContourConvex(quad)) {
     d.reason = format("red region has %d corners, not 4", int(quad.size()));
@@ -361,7 +422,7 @@ bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const Pla
     const cv::Point2d dir = side / std::max(length, 1e-9);
     const double max_distance = std::max(2.0, 0.05 * length);
     support.clear();
-    for (const auto& q : outline) {
+    for (const auto& q : ideal) {
       const cv::Point2d w = cv::Point2d(q) - a;
       const double t = w.dot(dir) / length;
       if (t > 0.15 && t < 0.85 && std::abs(w.x * dir.y - w.y * dir.x) <= max_distance) support.emplace_back(q);
@@ -436,21 +497,21 @@ bool PadDetector::evaluateWhole(const std::vector<cv::Point>& outline, const Pla
   const double solidity_term = (solidity - p.min_solidity) / std::max(1.0 - p.min_solidity, 1e-9);
   d.quality = clamp01(0.4 + 0.6 * std::min({clamp01(size_term), clamp01(shape_term), clamp01(solidity_term)}));
 
-  if (const auto* strip = findStrip(outline)) {
-    const cv::Moments m = cv::moments(*strip);
+  if (const int strip = findStrip(outline); strip >= 0) {
+    const cv::Moments m = cv::moments(strip_ideal_[strip]);
     d.strip_found = true;
     d.strip_centre_px = cv::Point2d(m.m10 / m.m00, m.m01 / m.m00);
   }
   return true;
 }
 
-bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const cv::Size& size,
-                                  const PlaneView& view, Candidate& candidate) const {
+bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const std::vector<cv::Point2f>& ideal,
+                                  const cv::Size& size, const PlaneView& view, Candidate& candidate) const {
   const auto& p = params_;
   const PadModel& pad = p.pad;
   Detection& d = candidate.detection;
   d.partial = true;
-  auto toPlane = [&](const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& plane, Eigen::Vector2d& centroid) {
+  auto toPlane = [&](const std::vector<cv::Point2f>& pixels, std::vector<cv::Point2f>& plane, Eigen::Vector2d& centroid) {
     plane.clear();
     plane.reserve(pixels.size());
     for (const auto& q : pixels) {
@@ -465,14 +526,15 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const c
   };
   std::vector<cv::Point2f> pad_plane, strip_plane;
   Eigen::Vector2d pad_centroid, strip_centroid;
-  if (!toPlane(outline, pad_plane, pad_centroid)) {
+  if (!toPlane(ideal, pad_plane, pad_centroid)) {
     d.reason = "red region reaches above the horizon";
     return false;
   }
-  std::vector<PlaneSegment> pad_segments = planeSegments(outline, pad_plane, size, p);
+  std::vector<PlaneSegment> pad_segments = planeSegments(outline, ideal, pad_plane, size, p);
   std::vector<PlaneSegment> strip_segments;  // filled below when the strip is in view
-  const std::vector<cv::Point>* strip = findStrip(outline);
-  if (strip && toPlane(*strip, strip_plane, strip_centroid)) strip_segments = planeSegments(*strip, strip_plane, size, p);
+  const int strip = findStrip(outline);
+  if (strip >= 0 && toPlane(strip_ideal_[strip], strip_plane, strip_centroid))
+    strip_segments = planeSegments(strip_outlines_[strip], strip_ideal_[strip], strip_plane, size, p);
   if (pad_segments.empty() && strip_segments.empty()) {
     d.reason = "pad cut by the image border with no straight edge in view";
     return false;
@@ -533,7 +595,7 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const c
     if (parallel.size() == 2) {
       const double gap = parallel[1].offset - parallel[0].offset;
       if (parallel[0].interior != 1 || parallel[1].interior != -1 ||
-          std::abs(gap / pad.side - 1.0) > p.size_tolerance) {
+          std::abs(gap / pad.side - 1.0) > p.edge_gap_tolerance) {
         d.reason = format("opposite red edges %.2f m apart, the pad is %.2f m", gap, pad.side);
         return false;
       }
@@ -637,6 +699,47 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const c
     }
   }
 
+  // Away from the image border, the outline must run along the square's edges: a smaller red thing (the
+  // corner of the false target beside the vehicle, its far ends in view) lies inside the square but turns
+  // off before the square's corners.
+  {
+    const double half = pad.side / 2;
+    int off_edge = 0, checked = 0;
+    for (size_t i = 0; i < outline.size(); ++i) {
+      if (onBorder(outline[i], size, p.border_margin_px)) continue;
+      const Eigen::Vector2d r = Eigen::Vector2d(pad_plane[i].x, pad_plane[i].y) - chosen->centre;
+      off_edge += std::abs(std::max(std::abs(r.dot(axes[0])), std::abs(r.dot(axes[1]))) - half) > tolerance;
+      ++checked;
+    }
+    const double share = double(off_edge) / std::max(checked, 1);
+    if (share > p.max_off_edge_share) {
+      d.reason = format("%.0f%% of the red outline runs inside the %.2f m square fitted to its edges, not along them",
+                        100.0 * share, pad.side);
+      return false;
+    }
+  }
+  // The square must be red wherever it is in view: the outline lying inside the square is not enough, as
+  // the corner or the edge of another red thing (on the ground beside the vehicle) fits a square too.
+  const double coverage = redCoverage(view, chosen->centre, axes);
+  if (coverage < p.min_partial_coverage) {
+    d.reason = format("the %.2f m square fitted to the red edges is red in only %.0f%% of its part in view", pad.side,
+                      100.0 * coverage);
+    return false;
+  }
+  // A corner of red alone could belong to anything red and square-cornered (the false target on the ground
+  // beside the vehicle): with neither two opposite edges nor the strip to confirm the pad, some of its area
+  // must show.
+  bool opposite_edges = false;
+  for (int axis = 0; axis < 2; ++axis)
+    opposite_edges |= std::count_if(pad_lines->begin(), pad_lines->end(),
+                                    [&](const EdgeLine& l) { return l.normal_axis == axis; }) == 2;
+  const double image_share = std::abs(cv::contourArea(ideal)) / size.area();
+  if (chosen->forward_axis < 0 && !opposite_edges && image_share < p.min_corner_image_share) {
+    d.reason = format("pad cut by the image border: a corner alone, covering %.1f%% of the image (no strip, no "
+                      "opposite edges)", 100.0 * image_share);
+    return false;
+  }
+
   const auto centre_px = view.planeToPixel(chosen->centre);
   if (!centre_px) {
     d.reason = "pad centre behind the camera";
@@ -670,6 +773,30 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const c
   return true;
 }
 
+double PadDetector::redCoverage(const PlaneView& view, const Eigen::Vector2d& centre,
+                                const Eigen::Vector2d (&axes)[2]) const {
+  // A grid over the square (short of its edges, which the image blurs), each point looked up in the mask.
+  constexpr int kGrid = 15;
+  const double reach = 0.45 * params_.pad.side;
+  const cv::Size size = pad_mask_.size();
+  const double margin = params_.border_margin_px + 1.0;
+  int in_view = 0, red = 0;
+  for (int i = 0; i < kGrid; ++i)
+    for (int j = 0; j < kGrid; ++j) {
+      const double u = reach * (2.0 * i / (kGrid - 1) - 1.0), v = reach * (2.0 * j / (kGrid - 1) - 1.0);
+      const auto ideal = view.planeToPixel(centre + u * axes[0] + v * axes[1]);
+      // Far outside the image the lens model means nothing (a polynomial): such points are not in view.
+      if (!ideal || std::abs(ideal->x - size.width / 2.0) > size.width || std::abs(ideal->y - size.height / 2.0) > size.height)
+        continue;
+      const cv::Point2d pixel = frame_lens_ ? frame_lens_->distort(*ideal) : *ideal;
+      if (pixel.x < margin || pixel.y < margin || pixel.x > size.width - 1 - margin || pixel.y > size.height - 1 - margin)
+        continue;
+      ++in_view;
+      red += pad_mask_.at<uint8_t>(cvRound(pixel.y), cvRound(pixel.x)) > 0;
+    }
+  return in_view > 0 ? double(red) / in_view : 0.0;
+}
+
 bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size,
                              const PlaneView& view, Detection& d) const {
   const auto& p = params_;
@@ -678,14 +805,15 @@ bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines
   for (size_t i = 0; i < white_blobs_.size(); ++i) {
     const auto& blob = white_blobs_[i];
     const double area = cv::contourArea(blob);
-    if (area < p.min_strip_area_px) continue;
+    if (area < p.min_strip_area_px || white_blob_red_share_[i] == 0.0) continue;  // a speck, or ground
     if (std::any_of(blob.begin(), blob.end(), [&](const cv::Point& q) { return onBorder(q, size, p.border_margin_px); })) {
       d.reason = "centre marker cut by the image border";
       continue;
     }
     // Corners of the marker's image (a small square: the rotated bounding box is close enough), on the plane.
     cv::Point2f box[4];
-    cv::minAreaRect(blob).points(box);
+    toIdeal(blob, ideal_);
+    cv::minAreaRect(ideal_).points(box);
     std::array<Eigen::Vector2d, 4> corners;
     bool on_plane = true;
     for (int k = 0; k < 4 && on_plane; ++k) {

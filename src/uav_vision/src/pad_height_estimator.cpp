@@ -1,5 +1,6 @@
 #include "uav_vision/pad_height_estimator.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace uav_vision {
@@ -25,7 +26,8 @@ std::string PadHeightEstimator::validate(const PadHeightParams& p) {
 }
 
 HeightEstimate PadHeightEstimator::estimate(double sonar_range, double baro_altitude,
-                                            const Eigen::Quaterniond& world_from_body, Surface hint) const {
+                                            const Eigen::Quaterniond& world_from_body, Surface hint,
+                                            double sonar_half_angle) const {
   const auto& p = params_;
   HeightEstimate result;
   if (!(world_from_body.coeffs().allFinite() && world_from_body.norm() > 0.5)) {
@@ -41,8 +43,11 @@ HeightEstimate PadHeightEstimator::estimate(double sonar_range, double baro_alti
   const bool sonar_usable = std::isfinite(sonar_range) && sonar_range >= 0.0 && sonar_range <= p.sonar_max_range &&
                             cos_tilt >= std::cos(p.max_tilt_deg * M_PI / 180.0);
   if (sonar_usable) {
-    // The camera sits on the sonar's axis, (sonar - camera offset) closer to the surface.
-    const double camera_above_surface = (sonar_range + p.sonar_below_base_link - p.camera_below_base_link) * cos_tilt;
+    // The echo's path leans from the vertical by what of the tilt the beam does not cover (all of it for a
+    // narrow beam). The camera sits on the sonar's axis, (sonar - camera offset) closer to the surface.
+    const double slant = std::max(0.0, std::acos(std::min(1.0, cos_tilt)) - std::max(0.0, sonar_half_angle));
+    const double camera_above_surface =
+        sonar_range * std::cos(slant) + (p.sonar_below_base_link - p.camera_below_base_link) * cos_tilt;
     const double if_pad = camera_above_surface;
     const double if_ground = camera_above_surface - p.height_landing_platform;
     // With no barometer every hypothesis is plausible; a negative height is never.

@@ -1,5 +1,6 @@
 #include "uav_vision/pad_localizer.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace uav_vision {
@@ -7,10 +8,13 @@ namespace uav_vision {
 PadLocalizer::PadLocalizer(const PadLocalizerParams& params, const CameraMount& mount)
     : params_(params), mount_(mount), detector_(params.detector), height_estimator_(params.height) {}
 
-Surface PadLocalizer::surfaceUnderSonar(const Detection& detection) const {
+Surface PadLocalizer::surfaceUnderSonar(const Detection& detection, const CameraIntrinsics& intrinsics,
+                                        double sonar_half_angle) const {
   if (!detection.found) return Surface::kUnknown;
-  if (detection.optical_axis_margin_px > params_.sonar_footprint_margin_px) return Surface::kPad;
-  if (detection.optical_axis_margin_px < -params_.sonar_footprint_margin_px) return Surface::kGround;
+  const double beam_px = std::max(intrinsics.fx, intrinsics.fy) * std::tan(std::clamp(sonar_half_angle, 0.0, 1.4));
+  const double reach = detection.optical_axis_margin_px + beam_px;  // how far the beam reaches into the pad
+  if (reach > params_.sonar_footprint_margin_px) return Surface::kPad;
+  if (reach < -params_.sonar_footprint_margin_px) return Surface::kGround;
   return Surface::kUnknown;
 }
 
@@ -57,8 +61,9 @@ PadObservation PadLocalizer::observeAtHeight(const cv::Mat& image, ColorOrder or
 
 PadObservation PadLocalizer::observe(const cv::Mat& image, ColorOrder order, const CameraIntrinsics& intrinsics,
                                      const Eigen::Quaterniond& world_from_body, double sonar_range,
-                                     double baro_altitude) const {
-  HeightEstimate height = height_estimator_.estimate(sonar_range, baro_altitude, world_from_body);
+                                     double baro_altitude, double sonar_half_angle) const {
+  HeightEstimate height =
+      height_estimator_.estimate(sonar_range, baro_altitude, world_from_body, Surface::kUnknown, sonar_half_angle);
   if (!height.valid) {
     PadObservation observation;
     observation.height = height;
@@ -71,17 +76,32 @@ PadObservation PadLocalizer::observe(const cv::Mat& image, ColorOrder order, con
     // The barometer cannot tell whether the sonar hits the pad or the ground; the image can, and a
     // wrong guess shows as a pad of the wrong size (whole) or a bad fit (partial).
     const Surface assumed = height.source == HeightEstimate::Source::kSonarOnPad ? Surface::kPad : Surface::kGround;
-    const Surface seen = surfaceUnderSonar(observation.detection);
+    const Surface seen = surfaceUnderSonar(observation.detection, intrinsics, sonar_half_angle);
     if (!observation.found || (seen != Surface::kUnknown && seen != assumed)) {
       const Surface other = assumed == Surface::kPad ? Surface::kGround : Surface::kPad;
       const HeightEstimate retry_height =
-          height_estimator_.estimate(sonar_range, baro_altitude, world_from_body, other);
+          height_estimator_.estimate(sonar_range, baro_altitude, world_from_body, other, sonar_half_angle);
       PadObservation retry =
           observeAtHeight(image, order, intrinsics, world_from_body, retry_height.camera_height);
       retry.height = retry_height;
-      const Surface retry_seen = surfaceUnderSonar(retry.detection);
+      const Surface retry_seen = surfaceUnderSonar(retry.detection, intrinsics, sonar_half_angle);
       if (retry.found && (retry_seen == Surface::kUnknown || retry_seen == other)) return retry;
+      if (observation.found) {
+        // Found only at the height the image contradicts: its position would be off by the pad's height
+        // over the camera's (12 % at 4 m).
+        observation.found = false;
+        observation.reason = "the image puts the sonar's echo on the " + std::string(seen == Surface::kPad ? "pad" : "ground") +
+                             ", and the pad is found only at the height of the other surface";
+      }
     }
+  } else if (observation.found && height.source == HeightEstimate::Source::kSonarOnGround &&
+             observation.detection.optical_axis_margin_px > params_.sonar_footprint_margin_px) {
+    // The barometer says the sonar's echo comes from the ground, yet the red region covers the beam's axis:
+    // the pad there, 0.5 m higher, would have echoed first. It lies on the ground: not the pad (the red
+    // false target beside the vehicle). Only the axis: a pad at the rim of a wide beam echoes along a slant,
+    // from further than it is below, and can pass for the ground.
+    observation.found = false;
+    observation.reason = "red region under the sonar, which sees the ground: not the pad";
   }
   return observation;
 }

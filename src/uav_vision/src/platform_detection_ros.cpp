@@ -28,6 +28,22 @@ void requirePositive(const ros::NodeHandle& pnh, const std::string& key, double 
     throw ConfigError("parameter '" + pnh.resolveName(key) + "' must be a positive number of seconds");
 }
 
+// camera_info's D as plumb_bob coefficients into `distortion`; empty when usable, else what is wrong.
+std::string lensDistortion(const std::string& model, const std::vector<double>& d, std::array<double, 5>& distortion) {
+  distortion.fill(0.0);
+  const bool all_zero = std::all_of(d.begin(), d.end(), [](double v) { return v == 0.0; });
+  if (all_zero) return "";  // a perfect lens, whatever the model's name
+  if (model != "plumb_bob")
+    return "distortion model '" + model + "' is not supported (plumb_bob: D = k1, k2, p1, p2, k3)";
+  if (d.size() != 5)
+    return "plumb_bob needs 5 distortion coefficients (k1, k2, p1, p2, k3), D has " + std::to_string(d.size());
+  for (size_t i = 0; i < d.size(); ++i) {
+    if (!std::isfinite(d[i])) return "D[" + std::to_string(i) + "] is not a finite number";
+    distortion[i] = d[i];
+  }
+  return "";
+}
+
 geometry_msgs::PointStamped pointMsg(const std_msgs::Header& image_header, const std::string& frame,
                                      const Eigen::Vector3d& p) {
   geometry_msgs::PointStamped msg;
@@ -60,15 +76,9 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   h.sonar_max_range = num("drone/sonar_max_range");
   h.baro_tolerance = num("drone/baro_tolerance");
   h.max_tilt_deg = num("drone/max_tilt_deg");
-  d.red_hue_low_max = integer("colour/red_hue_low_max");
-  d.red_hue_high_min = integer("colour/red_hue_high_min");
-  d.red_saturation_min = integer("colour/red_saturation_min");
-  d.red_value_min = integer("colour/red_value_min");
-  d.green_hue_min = integer("colour/green_hue_min");
-  d.green_hue_max = integer("colour/green_hue_max");
-  d.green_saturation_min = integer("colour/green_saturation_min");
-  d.green_value_min = integer("colour/green_value_min");
-  d.marker_saturation_max = integer("colour/marker_saturation_max");
+  d.red_margin_min = integer("colour/red_margin_min");
+  d.green_margin_min = integer("colour/green_margin_min");
+  d.marker_chroma_max = integer("colour/marker_chroma_max");
   d.marker_value_min = integer("colour/marker_value_min");
   d.morphology_kernel_px = integer("shape/morphology_kernel_px");
   d.min_area_px = num("shape/min_area_px");
@@ -82,6 +92,10 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   d.min_edge_length_px = num("shape/min_edge_length_px");
   d.fit_tolerance_m = num("shape/fit_tolerance_m");
   d.min_partial_support_px = num("shape/min_partial_support_px");
+  d.min_partial_coverage = num("shape/min_partial_coverage");
+  d.min_corner_image_share = num("shape/min_corner_image_share");
+  d.max_off_edge_share = num("shape/max_off_edge_share");
+  d.edge_gap_tolerance = num("shape/edge_gap_tolerance");
   d.min_strip_area_px = num("shape/min_strip_area_px");
   d.marker_min_surround = num("shape/marker_min_surround");
   c.localizer.sonar_footprint_margin_px = num("shape/sonar_footprint_margin_px");
@@ -89,9 +103,10 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   c.imu_max_offset = num("timing/imu_max_offset");
   c.sonar_timeout = num("timing/sonar_timeout");
   c.altimeter_timeout = num("timing/altimeter_timeout");
+  c.altimeter_window = num("timing/altimeter_window");
   c.warn_period = num("timing/warn_period");
   for (const char* key : {"timing/odom_timeout", "timing/imu_max_offset", "timing/sonar_timeout",
-                          "timing/altimeter_timeout", "timing/warn_period"})
+                          "timing/altimeter_timeout", "timing/altimeter_window", "timing/warn_period"})
     requirePositive(pnh, key, num(key));
   if (c.base_frame.empty() || c.world_frame.empty())
     throw ConfigError("parameters '" + pnh.resolveName("frames") + "/base' and '/world' must not be empty");
@@ -135,13 +150,13 @@ void PlatformDetectionRos::onCameraInfo(const sensor_msgs::CameraInfoConstPtr& m
   k.cy = msg->K[5];
   k.width = int(msg->width);
   k.height = int(msg->height);
-  if (const std::string problem = k.problem(); !problem.empty()) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped: %s", camera_info_sub_.getTopic().c_str(), problem.c_str());
+  std::string problem = lensDistortion(msg->distortion_model, msg->D, k.distortion);
+  if (problem.empty()) problem = k.problem();
+  if (!problem.empty()) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped (the last good one still serves): %s",
+                      camera_info_sub_.getTopic().c_str(), problem.c_str());
     return;
   }
-  if (std::any_of(msg->D.begin(), msg->D.end(), [](double v) { return v != 0.0; }))
-    ROS_WARN_ONCE("%s: non-zero distortion is ignored (the pinhole model assumes a rectified image)",
-                  camera_info_sub_.getTopic().c_str());
   intrinsics_ = k;
 }
 
@@ -174,7 +189,13 @@ void PlatformDetectionRos::onSonar(const sensor_msgs::RangeConstPtr& msg) {
     return;
   }
   if (auto problem = inputProblem(msg->header, config_.base_frame)) return rejections_.reject(sonar_sub_.getTopic(), *problem);
-  sonar_ = std::make_pair(msg->header.stamp, double(msg->range));
+  if (!(msg->field_of_view >= 0.0 && msg->field_of_view < M_PI)) {
+    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a reading whose field_of_view %f is not in [0, pi) rad",
+                      sonar_sub_.getTopic().c_str(), msg->field_of_view);
+    return;
+  }
+  sonar_ranges_.add(msg->header.stamp.toSec(), msg->range);
+  sonar_half_angle_ = 0.5 * msg->field_of_view;
 }
 
 void PlatformDetectionRos::onAltimeter(const landing_msgs::AltimeterConstPtr& msg) {
@@ -186,7 +207,7 @@ void PlatformDetectionRos::onAltimeter(const landing_msgs::AltimeterConstPtr& ms
     return rejections_.reject(altimeter_sub_.getTopic(), *problem);
   if (auto problem = inputProblem(msg->header, ""))  // an altitude above the ground: any frame
     return rejections_.reject(altimeter_sub_.getTopic(), *problem);
-  altitude_ = std::make_pair(msg->header.stamp, double(msg->altitude));
+  altitudes_.add(msg->header.stamp.toSec(), msg->altitude);
 }
 
 void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg) {
@@ -239,12 +260,6 @@ std::optional<landing_msgs::InputProblem> PlatformDetectionRos::inputProblem(con
   return std::nullopt;
 }
 
-double PlatformDetectionRos::freshValue(const std::optional<std::pair<ros::Time, double>>& reading,
-                                        const ros::Time& stamp, double timeout) {
-  if (!reading || std::abs((stamp - reading->first).toSec()) > timeout) return NAN;
-  return reading->second;
-}
-
 void PlatformDetectionRos::onImage(const sensor_msgs::ImageConstPtr& msg) {
   processImage(msg);
   lockstep_.ack(msg->header.stamp);  // processed or dropped: either way the simulator may go on
@@ -291,11 +306,13 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
                       config_.imu_max_offset);
     return;
   }
-  const double sonar = freshValue(sonar_, stamp, config_.sonar_timeout);
-  const double altitude = freshValue(altitude_, stamp, config_.altimeter_timeout);
+  // The readings of the frame's capture time, not the newest: the frame is 100-200 ms old.
+  const double sonar = sonar_ranges_.medianNear(stamp.toSec(), config_.sonar_timeout);
+  const double altitude = altitudes_.meanNear(stamp.toSec(), config_.altimeter_window, config_.altimeter_timeout);
   if (std::isnan(sonar) && std::isnan(altitude)) {
-    ROS_WARN_THROTTLE(period, "%s: no recent %s or %s to give the height: frame dropped", topic,
-                      sonar_sub_.getTopic().c_str(), altimeter_sub_.getTopic().c_str());
+    ROS_WARN_THROTTLE(period, "%s: no %s or %s within %.2f s / %.2f s of the frame to give the height: dropped", topic,
+                      sonar_sub_.getTopic().c_str(), altimeter_sub_.getTopic().c_str(), config_.sonar_timeout,
+                      config_.altimeter_timeout);
     return;
   }
   cv_bridge::CvImageConstPtr image;
@@ -305,7 +322,8 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
     ROS_WARN_THROTTLE(period, "%s: dropped a frame cv_bridge cannot read: %s", topic, e.what());
     return;
   }
-  const PadObservation observation = localizer_.observe(image->image, order, *intrinsics_, *attitude, sonar, altitude);
+  const PadObservation observation =
+      localizer_.observe(image->image, order, *intrinsics_, *attitude, sonar, altitude, sonar_half_angle_);
   if (observation.found)
     publish(msg->header, observation);
   else
@@ -337,11 +355,14 @@ void PlatformDetectionRos::publishDebugImage(const sensor_msgs::ImageConstPtr& m
   if (!d.outline.empty())
     cv::polylines(canvas, std::vector<std::vector<cv::Point>>{d.outline}, true, colour(0, 255, 255), 1);
   std::string text;
+  // The detection's points are ideal (undistorted) pixels: put them back through the lens.
+  auto onImage = [&](const cv::Point2d& ideal) { return distortPixel(intrinsics, ideal); };
   if (observation.found) {
     for (int k = 0; k < 4; ++k)
-      cv::line(canvas, d.corners_px[k], d.corners_px[(k + 1) % 4], colour(255, 0, 255), 1, cv::LINE_AA);
-    cv::drawMarker(canvas, d.centre_px, colour(255, 255, 0), cv::MARKER_CROSS, 12, 2);
-    if (d.strip_found) cv::circle(canvas, d.strip_centre_px, 4, colour(0, 255, 0), 2);
+      cv::line(canvas, onImage(d.corners_px[k]), onImage(d.corners_px[(k + 1) % 4]), colour(255, 0, 255), 1,
+               cv::LINE_AA);
+    cv::drawMarker(canvas, onImage(d.centre_px), colour(255, 255, 0), cv::MARKER_CROSS, 12, 2);
+    if (d.strip_found) cv::circle(canvas, onImage(d.strip_centre_px), 4, colour(0, 255, 0), 2);
     char buffer[128];
     std::snprintf(buffer, sizeof(buffer), "%s x=%.2f y=%.2f h=%.2f q=%.2f", d.marker ? "marker" : d.partial ? "partial" : "pad",
                   observation.centre_in_body.x(), observation.centre_in_body.y(), observation.height.camera_height,

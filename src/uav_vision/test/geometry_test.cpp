@@ -146,6 +146,24 @@ TEST_F(HeightEstimation, TiltShortensTheVerticalDistance) {
   EXPECT_NEAR(e.camera_height, base_above_ground - 0.035 * std::cos(tilt) - 0.497, 1e-9);
 }
 
+TEST_F(HeightEstimation, AWideBeamEchoesFromStraightBelowWithinItsAngle) {
+  const double base_above_ground = 3.0, half_angle = 12 * kDeg;
+  for (double tilt_deg : {0.0, 6.0, 12.0, 20.0}) {
+    const double tilt = tilt_deg * kDeg;
+    const Eigen::Quaterniond tilted = attitudeFromRpy(0, tilt, -1.0);
+    // The first echo: straight below while the vertical is inside the cone, else along its nearest edge.
+    const double feet_above_ground = base_above_ground - 0.065 * std::cos(tilt);
+    const double sonar = feet_above_ground / std::cos(std::max(0.0, tilt - half_angle));
+    const HeightEstimate e = estimator_.estimate(sonar, base_above_ground, tilted, Surface::kUnknown, half_angle);
+    ASSERT_TRUE(e.valid);
+    EXPECT_NEAR(e.camera_height, base_above_ground - 0.035 * std::cos(tilt) - 0.497, 1e-9) << tilt_deg;
+    // Taken for a narrow beam, the same range gives a camera height up to cos(tilt) lower.
+    if (tilt_deg > 0.0 && tilt_deg <= 12.0) {
+      EXPECT_LT(estimator_.estimate(sonar, base_above_ground, tilted).camera_height, e.camera_height - 0.01);
+    }
+  }
+}
+
 TEST_F(HeightEstimation, OutOfRangeOrMissingSonarFallsBackToTheBarometer) {
   for (double sonar : {std::numeric_limits<double>::infinity(), double(NAN), 7.0, -1.0}) {
     const HeightEstimate e = estimator_.estimate(sonar, 8.0, level_);

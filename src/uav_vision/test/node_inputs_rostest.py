@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 """rostest of the platform_detection node alone, fed by this test: a synthetic frame gives the expected
-pad position; bad inputs (empty or odd-sized image, wrong encoding, zero focal length, NaN IMU, sonar,
-altimeter, odometry) are dropped with a warning naming the topic and the node keeps working; the debug
-image comes when subscribed; a missing parameter stops the node with a message naming it."""
+pad position; bad inputs (empty or odd-sized image, wrong encoding, zero focal length, malformed lens
+distortion, NaN IMU, sonar, altimeter, odometry) are dropped with a warning naming the topic and the node
+keeps working; a distorted frame is undistorted with camera_info's D; a frame that arrives late is
+measured with the sonar and barometer readings of its capture time; the debug image comes when
+subscribed; a missing parameter stops the node with a message naming it."""
 import functools
 import os
 import subprocess
 import time
 import unittest
 
+import cv2
 import numpy as np
 import rospy
 import rostest
@@ -29,10 +32,10 @@ PAD_TOP = 0.497
 wait_for = functools.partial(testing.wait_for, timeout=WALL_TIMEOUT)
 
 
-def pad_image(width=320, height=240):
-    """Grey ground with a red 1 m pad centred 20 px right of the image centre, rgb8."""
+def pad_image(width=320, height=240, right=20, down=0):
+    """Grey ground with a red 1 m pad centred ``right`` px right of the image centre, ``down`` px below, rgb8."""
     image = np.full((height, width, 3), (110, 112, 108), np.uint8)
-    cx, cy = (width - 1) / 2.0 + 20, (height - 1) / 2.0
+    cx, cy = (width - 1) / 2.0 + right, (height - 1) / 2.0 + down
     x0, y0 = int(round(cx - SIDE_PX / 2 + 0.5)), int(round(cy - SIDE_PX / 2 + 0.5))
     image[y0:y0 + SIDE_PX, x0:x0 + SIDE_PX] = (217, 38, 38)
     return image
@@ -56,8 +59,25 @@ def image_msg(stamp, array=None, encoding="rgb8", width=None, height=None, step=
     return msg
 
 
-def camera_info(stamp, fx=FX):
-    msg = CameraInfo(width=320, height=240, distortion_model="plumb_bob", D=[0.0] * 5,
+# A wide-angle lens (the simulator's harsh profile): plumb_bob k1, k2, p1, p2, k3.
+LENS = [-0.30, 0.08, 0.002, -0.002, 0.0]
+
+
+def distorted(image, distortion, fx=FX):
+    """``image`` as a lens with ``distortion`` would have taken it: each pixel fetched from its ideal place."""
+    height, width = image.shape[:2]
+    camera = np.array([[fx, 0, 159.5], [0, fx, 119.5], [0, 0, 1]])
+    u, v = np.meshgrid(np.arange(width, dtype=np.float32), np.arange(height, dtype=np.float32))
+    pixels = np.stack([u.ravel(), v.ravel()], axis=1).reshape(-1, 1, 2)
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-9)
+    ideal = cv2.undistortPointsIter(pixels, camera, np.array(distortion), None, camera, criteria)
+    ideal = ideal.reshape(height, width, 2)
+    return cv2.remap(image, ideal[..., 0].astype(np.float32), ideal[..., 1].astype(np.float32), cv2.INTER_LINEAR,
+                     borderMode=cv2.BORDER_REPLICATE)
+
+
+def camera_info(stamp, fx=FX, model="plumb_bob", distortion=(0.0,) * 5):
+    msg = CameraInfo(width=320, height=240, distortion_model=model, D=list(distortion),
                      K=[fx, 0, 159.5, 0, fx, 119.5, 0, 0, 1], R=[1, 0, 0, 0, 1, 0, 0, 0, 1],
                      P=[fx, 0, 159.5, 0, 0, fx, 119.5, 0, 0, 0, 1, 0])
     msg.header.stamp, msg.header.frame_id = stamp, "ardrone/bottom_camera"
@@ -85,8 +105,9 @@ class NodeInputsTest(unittest.TestCase):
             wait_for(lambda p=pub: p.get_num_connections() > 0, "platform_detection to subscribe to " + pub.name)
 
     def publish_sensors(self, stamp, imu_quat=(1.0, 0.0, 0.0, 0.0), sonar=CAMERA_HEIGHT - 0.03,
-                        altitude=CAMERA_HEIGHT + 0.035 + PAD_TOP, fx=FX):
-        self.pub["info"].publish(camera_info(stamp, fx))
+                        altitude=CAMERA_HEIGHT + 0.035 + PAD_TOP, fx=FX, distortion=(0.0,) * 5, info=True):
+        if info:
+            self.pub["info"].publish(camera_info(stamp, fx, distortion=distortion))
         imu = Imu()
         imu.header.stamp, imu.header.frame_id = stamp, "ardrone/base_link"
         imu.orientation.w, imu.orientation.x, imu.orientation.y, imu.orientation.z = imu_quat
@@ -98,12 +119,14 @@ class NodeInputsTest(unittest.TestCase):
         alt.header.stamp = stamp
         self.pub["altimeter"].publish(alt)
 
-    def detect_once(self):
-        """A good frame with good sensors: returns the published pad position. The frame is sent again
-        until its result comes, as the sensor messages travel on other connections and may arrive later."""
-        stamp = rospy.Time.now()
-        self.publish_sensors(stamp)
-        frame = image_msg(stamp, pad_image())
+    def detect_once(self, image=None, distortion=(0.0,) * 5, stamp=None, publish_sensors=True, info=True):
+        """A good frame with good sensors (``info`` False: all but camera_info): returns the published pad
+        position. The frame is sent again until its result comes, as the sensor messages travel on other
+        connections and may arrive later."""
+        stamp = stamp or rospy.Time.now()
+        if publish_sensors:
+            self.publish_sensors(stamp, distortion=distortion, info=info)
+        frame = image_msg(stamp, pad_image() if image is None else image)
         last_sent = [0.0]
 
         def detected():
@@ -177,7 +200,46 @@ class NodeInputsTest(unittest.TestCase):
         self.assertEqual((debug[-1].width, debug[-1].height, debug[-1].encoding), (320, 240, "rgb8"))
         subscriber.unregister()
 
-    def test_6_missing_parameter_stops_the_node_naming_it(self):
+    def test_6_malformed_lens_distortion_is_dropped_saying_what_is_wrong(self):
+        stamp = rospy.Time.now()
+        info = self.pub["info"]
+        self.expect_warning(info, camera_info(stamp, distortion=LENS[:4]), "camera_info", "plumb_bob needs 5",
+                            "D has 4")
+        self.expect_warning(info, camera_info(stamp, distortion=[-0.3, float("nan"), 0.0, 0.0, 0.0]), "camera_info",
+                            "D[1] is not a finite number")
+        self.expect_warning(info, camera_info(stamp, model="equidistant", distortion=[0.1, 0.0, 0.0, 0.0]),
+                            "camera_info", "'equidistant' is not supported")
+        # Only the bad ones were dropped: the last good camera_info still serves.
+        self.detect_once(info=False)
+
+    def test_7_distorted_frame_is_undistorted_with_camera_info_d(self):
+        # The pad off towards a corner, where the lens bends it by about 3 px (3 cm at this height).
+        right, down = 90, 50
+        image = distorted(pad_image(right=right, down=down), LENS)
+        point = self.detect_once(image, distortion=LENS)
+        self.assertAlmostEqual(point.point.x, -down / FX * CAMERA_HEIGHT, delta=0.01)
+        self.assertAlmostEqual(point.point.y, -right / FX * CAMERA_HEIGHT, delta=0.01)
+        # Taken for a perfect lens, the same frame puts the pad centimetres off.
+        ignored = self.detect_once(image)
+        self.assertGreater(abs(ignored.point.y - point.point.y) + abs(ignored.point.x - point.point.x), 0.02)
+
+    def test_8_late_frame_takes_the_sonar_and_barometer_of_its_capture_time(self):
+        # The frame was taken at `taken`; by the time it arrives the drone has climbed 0.3 m.
+        taken = rospy.Time.now()
+        self.publish_sensors(taken - rospy.Duration(0.04))
+        self.publish_sensors(taken)
+        for offset in (0.15, 0.19):
+            self.publish_sensors(taken + rospy.Duration(offset), sonar=CAMERA_HEIGHT - 0.03 + 0.3,
+                                 altitude=CAMERA_HEIGHT + 0.035 + PAD_TOP + 0.3)
+        # A frame taken after the climb proves the new readings have arrived (and are used for it) ...
+        climbed = self.detect_once(stamp=taken + rospy.Duration(0.19), publish_sensors=False)
+        self.assertAlmostEqual(climbed.point.y, -20.0 / FX * (CAMERA_HEIGHT + 0.3), delta=0.004)
+        # ... and the late frame is measured with the height of its own time.
+        point = self.detect_once(stamp=taken, publish_sensors=False)
+        self.assertAlmostEqual(point.point.y, -20.0 / FX * CAMERA_HEIGHT, delta=0.004)
+        self.assertAlmostEqual(point.point.z, -(CAMERA_HEIGHT + 0.035), delta=0.02)
+
+    def test_9_missing_parameter_stops_the_node_naming_it(self):
         result = subprocess.run(["rosrun", "uav_vision", "platform_detection", "__name:=unconfigured_detection"],
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=WALL_TIMEOUT,
                                 env=dict(os.environ))

@@ -1,32 +1,29 @@
 #!/usr/bin/env python3
-"""Renders the bottom-camera fixtures of the detector gtest with mujoco_sim's ROS-free core.
+"""Renders the bottom-camera fixtures of the detector gtests with mujoco_sim's ROS-free core.
 
-Writes test/data/rendered/*.png (RGB images saved as ordinary PNGs) and test/data/rendered/truth.csv
-with, for every image, the ground truth (pad centre relative to the drone and the camera, attitude,
-camera height above the pad) and what the drone's own sensors would read there (IMU attitude with its
-noise, sonar range, barometric altitude). Poses are drawn from a fixed seed, so re-running it gives the
-same files. Run from anywhere after `source env.sh`:
+Two sets, each a directory of PNGs (RGB images saved as ordinary PNGs) and a truth.csv (columns:
+uav_vision.rendered_frames.TRUTH_COLUMNS) with, per image, the ground truth and what the drone's own
+sensors would read there:
+- ``ideal`` (test/data/rendered): the first fixtures, pinned to the ``ideal`` realism profile (perfect
+  lens, even light, no blur or noise), poses drawn by band;
+- ``realistic`` (test/data/rendered_realistic): the ``realistic`` profile (lens distortion, the sun's
+  shadows of the drone and the vehicle, motion blur, exposure wander) and a few ``harsh`` frames, each
+  frame chosen for what it shows (see REALISTIC). The profile's sensor noise is left out of the PNGs
+  (it would make each ten times larger) and recorded in pixel_noise_std_omitted for the test to add.
+Poses come from fixed seeds, so re-running gives the same files. After `source env.sh`:
 
-    MUJOCO_GL=osmesa python src/uav_vision/test/render_fixtures.py
+    MUJOCO_GL=osmesa python src/uav_vision/test/render_fixtures.py [--set ideal|realistic|all]
 """
 import argparse
-import csv
 import math
 import os
 
-import cv2
-import mujoco
 import numpy as np
 
-from mujoco_sim.autopilot import quat_to_matrix
-from mujoco_sim.schema import load_sim_config
-from mujoco_sim.simulator import Simulator
+from uav_vision.rendered_frames import FrameRenderer, View, save_png, write_truth
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIM_PKG = os.path.join(HERE, "..", "..", "mujoco_sim")
-OUT = os.path.join(HERE, "data", "rendered")
-CAMERA_BELOW_BASE = 0.035   # bottom camera origin below base_link [m] (docs/conventions.md)
-PAD_HALF = 0.5              # half side of the pad [m]
+OUT = {"ideal": os.path.join(HERE, "data", "rendered"), "realistic": os.path.join(HERE, "data", "rendered_realistic")}
 
 # (band, number of images, camera height range above the pad [m], horizontal camera offset from the pad
 # centre [m], maximum tilt [deg], vehicle). Low passes see the pad partly; high ones see all of it.
@@ -42,132 +39,163 @@ BANDS = [
     ("close", 8, (0.3, 0.6), (0.0, 0.12), 10.0, "summit_xl"),
     ("close", 2, (0.3, 0.6), (0.0, 0.10), 8.0, "car"),
 ]
-MARKER_HALF = 0.07          # half side of the white centre marker [m]
 
 
-def rotation_quat(roll, pitch, yaw):
-    """Quaternion (w, x, y, z) of R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return np.array([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])
+def render_ideal(out):
+    """The first fixture set, drawn exactly as it always was (same seed, same order of draws)."""
+    rng = np.random.default_rng(2026)
+    renderers, rows, index = {}, [], 0
+    for band, count, (h_min, h_max), (r_min, r_max), max_tilt, vehicle in BANDS:
+        if vehicle not in renderers:
+            renderers[vehicle] = FrameRenderer(vehicle, "ideal", seed=11, sonar_neighbours=False)
+        renderer = renderers[vehicle]
+        made = 0
+        while made < count:
+            vehicle_yaw = rng.uniform(-math.pi, math.pi)
+            vehicle_position = (rng.uniform(-3, 3), rng.uniform(-3, 3))
+            height = rng.uniform(h_min, h_max)
+            radius, bearing = rng.uniform(r_min, r_max), rng.uniform(-math.pi, math.pi)
+            tilt, tilt_dir = math.radians(rng.uniform(0.0, max_tilt)), rng.uniform(-math.pi, math.pi)
+            view = View(camera_offset=(radius * math.cos(bearing), radius * math.sin(bearing)), camera_height=height,
+                        roll=tilt * math.cos(tilt_dir), pitch=tilt * math.sin(tilt_dir),
+                        yaw=rng.uniform(-math.pi, math.pi),
+                        vehicle_yaw=vehicle_yaw, vehicle_position=vehicle_position, band=band)
+            if renderer.set_view(view) < 0.15:
+                continue  # the pad hardly in view: not a detection fixture
+            name = "%02d_%s_%s_h%03d.png" % (index, band, vehicle, int(round(height * 100)))
+            image, row = renderer.render(name)
+            save_png(os.path.join(out, name), image)
+            rows.append(row)
+            index += 1
+            made += 1
+    for renderer in renderers.values():
+        renderer.close()
+    return rows
 
 
-def make_sim(vehicle):
-    config = load_sim_config(os.path.join(SIM_PKG, "config", "sim.yaml"))
-    return Simulator(config, os.path.join(SIM_PKG, "models", "world_%s.xml" % vehicle), vehicle, seed=11)
+def offset_for_pixel(u, v, height, yaw=0.0, intrinsics=(256.0, 159.5, 119.5)):
+    """Camera offset from the pad (world, horizontal) that puts the pad centre near pixel (u, v) of the
+    ideal image of a level camera with heading ``yaw``: image right is the drone's right, image up its
+    forward (docs/conventions.md)."""
+    f, cx, cy = intrinsics
+    forward, right = -(v - cy) / f * height, (u - cx) / f * height  # pad from the camera, body axes
+    c, s = math.cos(yaw), math.sin(yaw)
+    pad_x, pad_y = c * forward + s * right, s * forward - c * right  # body (forward, left=-right) -> world
+    return (-pad_x, -pad_y)
 
 
-def project(points_world, cam_pos, cam_rot_world, intrinsics):
-    """Pixel coordinates of world points; cam_rot_world = optical axes in the world."""
-    _, _, fx, fy, cx, cy = intrinsics
-    p = (np.asarray(points_world) - cam_pos) @ cam_rot_world
-    return np.stack([fx * p[:, 0] / p[:, 2] + cx, fy * p[:, 1] / p[:, 2] + cy], axis=1)
+def shadow_view(renderer, arguments):
+    """View arguments with ``jitter`` replaced: the camera where the drone's shadow falls on the pad, ``jitter``
+    [m] from its centre, the drone tilted (as when flying towards it) to bring the pad into view."""
+    arguments = dict(arguments)
+    sun = renderer.towards_sun
+    offset = np.asarray(arguments.pop("jitter")) + sun[:2] / sun[2] * (arguments["camera_height"] + 0.035)
+    towards_pad = -offset / np.linalg.norm(offset)
+    yaw, tilt = arguments.get("yaw", 0.0), math.radians(arguments.pop("tilt_towards_pad", 12.0))
+    c, s = math.cos(yaw), math.sin(yaw)
+    forward, left = c * towards_pad[0] + s * towards_pad[1], -s * towards_pad[0] + c * towards_pad[1]
+    # Pitching forward (negative pitch) and rolling left (positive roll) turn the camera that way.
+    arguments.update(camera_offset=tuple(offset), pitch=-tilt * forward, roll=tilt * left)
+    return arguments
 
 
-def inside(pixels, width, height):
-    return (pixels[:, 0] >= 0) & (pixels[:, 0] <= width - 1) & (pixels[:, 1] >= 0) & (pixels[:, 1] <= height - 1)
+# What the realistic set shows, frame by frame: (label, renderer key, view arguments). Renderer keys:
+# (vehicle, profile, seed, overrides), one renderer per seed; a high sun (within the realistic profile's range) puts the drone's
+# shadow in the camera's view of the pad. Labels: shadow, blur, dark, bright, corner (the pad near an
+# image corner, where the lens bends it most), false (the red false target in view), none (no pad in
+# view), low (pad cut by the border), close (the marker alone), car, harsh.
+SUMMIT = ("summit_xl", "realistic", 101, {})
+SUMMIT_2 = ("summit_xl", "realistic", 102, {})
+HIGH_SUN = ("summit_xl", "realistic", 103, {"sun_elevation_deg": 63.0, "sun_elevation_spread_deg": 0.0})
+HIGH_SUN_2 = ("summit_xl", "realistic", 104, {"sun_elevation_deg": 60.0, "sun_elevation_spread_deg": 0.0})
+CAR = ("car", "realistic", 105, {})
+HARSH = ("summit_xl", "harsh", 106, {"sun_elevation_deg": 45.0, "sun_elevation_spread_deg": 0.0})
+DRIFT = dict(relative_velocity=(0.4, -0.2, -0.1), body_rates=(0.1, -0.15, 0.05))  # an ordinary approach
+FAST = dict(relative_velocity=(2.0, 1.0, -0.3), body_rates=(0.8, -0.6, 0.3))     # a hard manoeuvre: blur
+REALISTIC = [
+    ("whole", SUMMIT, dict(camera_offset=(0.3, -0.2), camera_height=2.0, roll=0.05, pitch=-0.08, yaw=0.4, **DRIFT)),
+    ("whole", SUMMIT, dict(camera_offset=(-0.5, 0.4), camera_height=3.0, roll=-0.1, pitch=0.05, yaw=2.1, **DRIFT)),
+    ("whole", SUMMIT, dict(camera_offset=(0.2, 0.6), camera_height=4.0, roll=0.12, pitch=0.1, yaw=-1.2, **DRIFT)),
+    ("whole", SUMMIT_2, dict(camera_offset=(0.0, 0.3), camera_height=1.5, roll=0.0, pitch=0.1, yaw=-2.6, **DRIFT)),
+    ("corner", SUMMIT, dict(camera_offset=offset_for_pixel(262, 28, 3.0), camera_height=3.0, **DRIFT)),
+    ("corner", SUMMIT_2, dict(camera_offset=offset_for_pixel(55, 200, 3.5, yaw=1.0), camera_height=3.5, yaw=1.0)),
+    ("corner", SUMMIT_2, dict(camera_offset=offset_for_pixel(258, 195, 4.5, yaw=-0.5), camera_height=4.5,
+                              yaw=-0.5, **DRIFT)),
+    ("corner", SUMMIT, dict(camera_offset=offset_for_pixel(50, 35, 4.0, yaw=2.5), camera_height=4.0, yaw=2.5)),
+    ("shadow", HIGH_SUN, dict(camera_height=1.2, jitter=(0.0, 0.0), yaw=0.3, **DRIFT)),
+    ("shadow", HIGH_SUN, dict(camera_height=1.6, jitter=(0.35, 0.1), yaw=1.9)),
+    ("shadow", HIGH_SUN, dict(camera_height=2.2, jitter=(-0.3, 0.45), yaw=-1.0, **DRIFT)),
+    ("shadow", HIGH_SUN_2, dict(camera_height=1.0, jitter=(0.45, -0.45), yaw=2.8)),
+    ("shadow", HIGH_SUN_2, dict(camera_height=1.8, jitter=(-0.5, 0.0), yaw=0.9, **DRIFT)),
+    ("shadow", HIGH_SUN_2, dict(camera_height=2.6, jitter=(0.1, -0.5), yaw=-2.2)),
+    ("blur", SUMMIT, dict(camera_offset=(0.2, 0.1), camera_height=1.2, yaw=0.7, **FAST)),
+    ("blur", SUMMIT_2, dict(camera_offset=(-0.3, 0.2), camera_height=2.0, yaw=-1.4, roll=0.15, **FAST)),
+    ("blur", CAR, dict(camera_offset=(0.2, -0.3), camera_height=1.5, yaw=2.0, vehicle_speed=12.0, **FAST)),
+    ("dark", SUMMIT, dict(camera_offset=(0.4, 0.1), camera_height=2.5, yaw=1.1, log_gain=-0.3, **DRIFT)),
+    ("dark", HIGH_SUN, dict(camera_height=1.4, jitter=(0.2, 0.2), yaw=-0.4, log_gain=-0.3)),
+    ("bright", SUMMIT_2, dict(camera_offset=(-0.2, -0.5), camera_height=3.2, yaw=0.2, log_gain=0.3, **DRIFT)),
+    ("bright", HIGH_SUN_2, dict(camera_height=1.3, jitter=(-0.2, 0.3), yaw=2.4, log_gain=0.3)),
+    ("false", SUMMIT, dict(camera_offset=(-0.6, 0.9), camera_height=3.5, yaw=0.0, false_target=True, **DRIFT)),
+    ("false", SUMMIT_2, dict(camera_offset=(-0.2, 1.0), camera_height=4.5, yaw=1.3, false_target=True)),
+    ("false", CAR, dict(camera_offset=(0.3, 1.2), camera_height=4.0, yaw=-0.7, false_target=True, **DRIFT)),
+    ("false", SUMMIT, dict(camera_offset=(0.1, 1.6), camera_height=2.0, yaw=0.5, false_target=True)),
+    ("false", SUMMIT_2, dict(camera_offset=(0.5, 2.0), camera_height=1.2, yaw=-2.0, false_target=True, **DRIFT)),
+    ("false", SUMMIT, dict(camera_offset=(-0.7, 1.9), camera_height=4.8, yaw=2.9, false_target=True)),
+    ("none", SUMMIT, dict(camera_offset=(3.0, -2.0), camera_height=2.5, yaw=0.8, **DRIFT)),
+    ("none", SUMMIT_2, dict(camera_offset=(-1.6, -1.2), camera_height=1.5, yaw=-1.1)),
+    ("none", CAR, dict(camera_offset=(1.8, 0.0), camera_height=1.0, yaw=0.0, **DRIFT)),
+    ("low", SUMMIT, dict(camera_offset=(0.35, 0.3), camera_height=0.85, roll=0.1, yaw=0.6, **DRIFT)),
+    ("low", SUMMIT_2, dict(camera_offset=(-0.4, 0.1), camera_height=0.95, pitch=-0.1, yaw=-2.3)),
+    ("low", HIGH_SUN, dict(camera_height=0.9, jitter=(0.3, -0.25), yaw=1.5, **DRIFT)),
+    ("low", SUMMIT, dict(camera_offset=(0.1, -0.45), camera_height=0.8, roll=-0.12, yaw=3.0)),
+    ("close", SUMMIT, dict(camera_offset=(0.03, -0.02), camera_height=0.45, yaw=0.9, **DRIFT)),
+    ("close", SUMMIT_2, dict(camera_offset=(-0.05, 0.04), camera_height=0.55, roll=0.08, yaw=-0.3)),
+    ("close", HIGH_SUN, dict(camera_height=0.5, jitter=(0.0, 0.05), tilt_towards_pad=22.0, yaw=2.2)),
+    ("car", CAR, dict(camera_offset=(0.2, 0.3), camera_height=2.5, roll=0.08, yaw=1.4, vehicle_speed=10.0, **DRIFT)),
+    ("car", CAR, dict(camera_offset=(-0.4, 0.2), camera_height=4.0, pitch=0.1, yaw=-0.6, vehicle_speed=15.0)),
+    ("harsh", HARSH, dict(camera_offset=(0.3, 0.2), camera_height=2.5, yaw=0.5, log_gain=-0.5, **DRIFT)),
+    ("harsh", HARSH, dict(camera_height=1.6, jitter=(0.2, -0.2), yaw=-1.7, **FAST)),
+    ("harsh", HARSH, dict(camera_offset=(-0.3, 0.8), camera_height=3.5, yaw=2.0, log_gain=0.5, false_target=True)),
+    ("harsh", HARSH, dict(camera_offset=(0.5, -0.4), camera_height=4.5, roll=0.1, yaw=-2.8, **DRIFT)),
+]
+
+
+def render_realistic(out):
+    """The realistic set: each frame of REALISTIC, the profile's sensor noise left to the test."""
+    renderers, rows = {}, []
+    for index, (label, key, arguments) in enumerate(REALISTIC):
+        vehicle, profile, seed, overrides = key
+        if seed not in renderers:
+            renderers[seed] = FrameRenderer(vehicle, profile, seed, overrides, omit_pixel_noise=True)
+        renderer = renderers[seed]
+        if "jitter" in arguments:
+            arguments = shadow_view(renderer, arguments)
+        # The vehicle heads along world x (the false target 1.6 m to its left, +y); the drone's yaw turns the view.
+        view = View(band=label, vehicle_position=(0.5, -0.5), **arguments)
+        renderer.set_view(view)
+        name = "%02d_%s_%s_h%03d.png" % (index, label, key[0], int(round(view.camera_height * 100)))
+        image, row = renderer.render(name)
+        save_png(os.path.join(out, name), image)
+        rows.append(row)
+    for renderer in renderers.values():
+        renderer.close()
+    return rows
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default=OUT)
+    parser.add_argument("--set", choices=("ideal", "realistic", "all"), default="all")
+    parser.add_argument("--out", help="directory to write to instead of test/data/<set> (one set only)")
     args = parser.parse_args()
-    os.makedirs(args.out, exist_ok=True)
-    rng = np.random.default_rng(2026)
-    sims = {}
-    rows = []
-    index = 0
-    for band, count, (h_min, h_max), (r_min, r_max), max_tilt, vehicle in BANDS:
-        if vehicle not in sims:
-            sims[vehicle] = make_sim(vehicle)
-        sim = sims[vehicle]
-        m, d = sim.model, sim.data
-        strip_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "landing_pad_heading")
-        marker_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "landing_pad_marker")
-        made = 0
-        while made < count:
-            vehicle_yaw = rng.uniform(-math.pi, math.pi)
-            d.qpos[sim.vehicle_qpos:sim.vehicle_qpos + 3] = (rng.uniform(-3, 3), rng.uniform(-3, 3), vehicle_yaw)
-            mujoco.mj_forward(m, d)
-            pad = sim.pad_position()
-            height = rng.uniform(h_min, h_max)
-            radius, bearing = rng.uniform(r_min, r_max), rng.uniform(-math.pi, math.pi)
-            tilt, tilt_dir = math.radians(rng.uniform(0.0, max_tilt)), rng.uniform(-math.pi, math.pi)
-            roll, pitch = tilt * math.cos(tilt_dir), tilt * math.sin(tilt_dir)
-            yaw = rng.uniform(-math.pi, math.pi)
-            quat = rotation_quat(roll, pitch, yaw)
-            rot = quat_to_matrix(quat)
-            camera_offset_world = rot @ np.array([0.0, 0.0, -CAMERA_BELOW_BASE])
-            camera = pad + np.array([radius * math.cos(bearing), radius * math.sin(bearing), height])
-            base = camera - camera_offset_world
-            sim._set_drone_pose(tuple(base), yaw)
-            d.qpos[sim.drone_qpos + 3:sim.drone_qpos + 7] = quat
-            mujoco.mj_forward(m, d)
-
-            intrinsics = sim.camera_intrinsics()
-            width, height_px = intrinsics[0], intrinsics[1]
-            cam_rot_world = rot @ sim.camera_pose_in_body()[1]
-            strip_top = d.geom_xpos[strip_geom] + d.geom_xmat[strip_geom].reshape(3, 3) @ np.array([0, 0, 0.0015])
-            strip_axes = d.geom_xmat[strip_geom].reshape(3, 3)
-            pad_axes = d.geom_xmat[sim.pad_geom].reshape(3, 3)
-            corners = [pad + pad_axes @ np.array([sx * PAD_HALF, sy * PAD_HALF, 0]) for sx, sy in
-                       ((1, 1), (-1, 1), (-1, -1), (1, -1))]
-            strip_corners = [strip_top + strip_axes @ np.array([sx * 0.06, sy * 0.35, 0]) for sx, sy in
-                             ((1, 1), (-1, 1), (-1, -1), (1, -1))]
-            corners_px = project(corners, camera, cam_rot_world, intrinsics)
-            marker_top = d.geom_xpos[marker_geom] + pad_axes @ np.array([0, 0, 0.0015])
-            marker_corners = [marker_top + pad_axes @ np.array([sx * MARKER_HALF, sy * MARKER_HALF, 0]) for sx, sy in
-                              ((1, 1), (-1, 1), (-1, -1), (1, -1))]
-            marker_px = project(marker_corners, camera, cam_rot_world, intrinsics)
-            strip_px = project(strip_corners, camera, cam_rot_world, intrinsics)
-            # Visible share of the pad, from a grid of points on it.
-            grid = np.array([pad + pad_axes @ np.array([u, v, 0]) for u in np.linspace(-0.5, 0.5, 21)
-                             for v in np.linspace(-0.5, 0.5, 21)])
-            visible_share = float(np.mean(inside(project(grid, camera, cam_rot_world, intrinsics), width, height_px)))
-            if visible_share < 0.15:
-                continue  # the pad hardly in view: not a detection fixture
-
-            image = sim.render_camera(noise_std=0.0)
-            imu_quat, _, _ = sim.imu()
-            sonar = sim.sonar()
-            altitude, _ = sim.altimeter()
-            name = "%02d_%s_%s_h%03d.png" % (index, band, vehicle, int(round(height * 100)))
-            cv2.imwrite(os.path.join(args.out, name), cv2.cvtColor(image, cv2.COLOR_RGB2BGR),
-                        [cv2.IMWRITE_PNG_COMPRESSION, 9])
-            pad_rel_world = pad - base
-            rows.append({
-                "image": name, "band": band, "vehicle": vehicle,
-                "height_landing_platform": round(float(pad[2]), 4),
-                "camera_height": height,
-                "fx": intrinsics[2], "fy": intrinsics[3], "cx": intrinsics[4], "cy": intrinsics[5],
-                "pad_base_x": (rot.T @ pad_rel_world)[0], "pad_base_y": (rot.T @ pad_rel_world)[1],
-                "pad_base_z": (rot.T @ pad_rel_world)[2],
-                "pad_world_x": pad_rel_world[0], "pad_world_y": pad_rel_world[1], "pad_world_z": pad_rel_world[2],
-                "pad_camera_x": ((pad - camera) @ cam_rot_world)[0], "pad_camera_y": ((pad - camera) @ cam_rot_world)[1],
-                "pad_camera_z": ((pad - camera) @ cam_rot_world)[2],
-                "strip_base_x": (rot.T @ (strip_top - base))[0], "strip_base_y": (rot.T @ (strip_top - base))[1],
-                "strip_base_z": (rot.T @ (strip_top - base))[2],
-                "qw": quat[0], "qx": quat[1], "qy": quat[2], "qz": quat[3],
-                "imu_qw": imu_quat[0], "imu_qx": imu_quat[1], "imu_qy": imu_quat[2], "imu_qz": imu_quat[3],
-                "tilt_deg": math.degrees(tilt),
-                "sonar_range": sonar, "baro_altitude": altitude,
-                "visible_pad_share": visible_share,
-                "visible_pad_corners": int(np.sum(inside(corners_px, width, height_px))),
-                "strip_corners_in_view": int(np.sum(inside(strip_px, width, height_px))),
-                "marker_corners_in_view": int(np.sum(inside(marker_px, width, height_px))),
-            })
-            index += 1
-            made += 1
-    for sim in sims.values():
-        sim.close()
-    with open(os.path.join(args.out, "truth.csv"), "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]), lineterminator="\n")
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: ("%.6f" % v if isinstance(v, float) else v) for k, v in row.items()})
-    print("wrote %d images and truth.csv to %s" % (len(rows), args.out))
+    sets = ("ideal", "realistic") if args.set == "all" else (args.set,)
+    if args.out and len(sets) > 1:
+        parser.error("--out needs --set ideal or --set realistic")
+    for name in sets:
+        out = args.out or OUT[name]
+        os.makedirs(out, exist_ok=True)
+        rows = {"ideal": render_ideal, "realistic": render_realistic}[name](out)
+        write_truth(os.path.join(out, "truth.csv"), rows)
+        print("wrote %d images and truth.csv to %s" % (len(rows), out))
 
 
 if __name__ == "__main__":

@@ -13,65 +13,13 @@ namespace uav_vision::test {
 
 std::string testDataDir() { return UAV_VISION_TEST_DATA; }
 
-std::vector<RenderedFixture> loadRenderedFixtures() {
-  const std::string path = testDataDir() + "/rendered/truth.csv";
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open " + path);
-  std::string line;
-  std::getline(in, line);
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  std::vector<std::string> header;
-  {
-    std::stringstream s(line);
-    for (std::string cell; std::getline(s, cell, ',');) header.push_back(cell);
-  }
-  std::vector<RenderedFixture> fixtures;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
-    std::map<std::string, std::string> row;
-    std::stringstream s(line);
-    size_t column = 0;
-    for (std::string cell; std::getline(s, cell, ',') && column < header.size(); ++column) row[header[column]] = cell;
-    auto num = [&](const std::string& key) {
-      const auto it = row.find(key);
-      if (it == row.end()) throw std::runtime_error(path + ": no column " + key);
-      return std::stod(it->second);
-    };
-    auto vec = [&](const std::string& prefix) {
-      return Eigen::Vector3d(num(prefix + "_x"), num(prefix + "_y"), num(prefix + "_z"));
-    };
-    RenderedFixture f;
-    f.image = row["image"];
-    f.band = row["band"];
-    f.vehicle = row["vehicle"];
-    f.height_landing_platform = num("height_landing_platform");
-    f.camera_height = num("camera_height");
-    f.intrinsics.fx = num("fx");
-    f.intrinsics.fy = num("fy");
-    f.intrinsics.cx = num("cx");
-    f.intrinsics.cy = num("cy");
-    f.intrinsics.width = 320;
-    f.intrinsics.height = 240;
-    f.pad_in_body = vec("pad_base");
-    f.pad_world_aligned = vec("pad_world");
-    f.strip_in_body = vec("strip_base");
-    f.attitude = Eigen::Quaterniond(num("qw"), num("qx"), num("qy"), num("qz"));
-    f.imu_attitude = Eigen::Quaterniond(num("imu_qw"), num("imu_qx"), num("imu_qy"), num("imu_qz"));
-    f.tilt_deg = num("tilt_deg");
-    f.sonar_range = num("sonar_range");
-    f.baro_altitude = num("baro_altitude");
-    f.visible_pad_share = num("visible_pad_share");
-    f.visible_pad_corners = int(num("visible_pad_corners"));
-    f.strip_corners_in_view = int(num("strip_corners_in_view"));
-    f.marker_corners_in_view = int(num("marker_corners_in_view"));
-    fixtures.push_back(f);
-  }
-  return fixtures;
-}
+std::string idealFixturesDir() { return testDataDir() + "/rendered"; }
+std::string realisticFixturesDir() { return testDataDir() + "/rendered_realistic"; }
+
+std::vector<RenderedFixture> loadRenderedFixtures() { return loadRenderedFrames(idealFixturesDir()); }
 
 cv::Mat loadImageRgb(const std::string& name) {
-  const cv::Mat bgr = cv::imread(testDataDir() + "/rendered/" + name, cv::IMREAD_COLOR);
+  const cv::Mat bgr = cv::imread(idealFixturesDir() + "/" + name, cv::IMREAD_COLOR);
   if (bgr.empty()) throw std::runtime_error("cannot read " + name);
   cv::Mat rgb;
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);

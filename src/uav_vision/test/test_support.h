@@ -9,23 +9,17 @@
 
 #include "uav_vision/camera_geometry.h"
 #include "uav_vision/pad_detector.h"
+#include "uav_vision/rendered_frames.h"
 
 namespace uav_vision::test {
 
-// One row of test/data/rendered/truth.csv (written by test/render_fixtures.py).
-struct RenderedFixture {
-  std::string image, band, vehicle;
-  double height_landing_platform = 0, camera_height = 0;
-  CameraIntrinsics intrinsics;
-  Eigen::Vector3d pad_in_body, pad_world_aligned, strip_in_body;  // from base_link [m]
-  Eigen::Quaterniond attitude, imu_attitude;                     // true, and as the IMU reported it
-  double tilt_deg = 0, sonar_range = 0, baro_altitude = 0, visible_pad_share = 0;
-  int visible_pad_corners = 0, strip_corners_in_view = 0, marker_corners_in_view = 0;
-};
-
+// test/data/rendered (the ideal fixtures) and test/data/rendered_realistic, both by test/render_fixtures.py.
+using RenderedFixture = RenderedFrame;
 std::string testDataDir();
-std::vector<RenderedFixture> loadRenderedFixtures();
-cv::Mat loadImageRgb(const std::string& name);  // from test/data/rendered, RGB order
+std::string idealFixturesDir();
+std::string realisticFixturesDir();
+std::vector<RenderedFixture> loadRenderedFixtures();  // the ideal set
+cv::Mat loadImageRgb(const std::string& name);        // from the ideal set, RGB order
 
 // The simulator's bottom camera intrinsics (320x240, fx = fy = 256).
 CameraIntrinsics simIntrinsics();

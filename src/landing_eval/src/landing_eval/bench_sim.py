@@ -30,18 +30,31 @@ def measure(sim_seconds, camera_rate, timeout):
     return stats, rate
 
 
+def run(sim_seconds=60.0, camera_rate=30.0, timeout=600.0, realism="realistic", vehicle="summit_xl"):
+    """(the simulator's /sim_stats, the camera rate a subscriber received) of one run of sim.launch alone."""
+    log = os.path.join(tempfile.mkdtemp(prefix="bench_sim_"), "launch.log")
+    launch = ["mujoco_sim", "sim.launch", "real_time_factor:=0", "output:=log", "camera_rate:=%g" % camera_rate,
+              "realism:=%s" % realism, "vehicle:=%s" % vehicle]
+    with IsolatedLaunch(launch, log) as ros:
+        os.environ["ROS_MASTER_URI"] = ros.master_uri
+        ros.wait_for_master()
+        stats, rate = measure(sim_seconds, camera_rate, timeout)
+    return stats, rate, log
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--sim-seconds", type=float, default=60.0, help="span of sim time to run [s]")
     parser.add_argument("--camera-rate", type=float, default=30.0, help="camera frame rate [Hz]")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-clock limit [s]")
+    parser.add_argument("--realism", choices=("ideal", "realistic", "harsh"), default="realistic",
+                        help="realism profile of the simulated world")
+    parser.add_argument("--json", action="store_true", help="print the figures as one JSON line (for bench_loop)")
     args = parser.parse_args(argv)
-    log = os.path.join(tempfile.mkdtemp(prefix="bench_sim_"), "launch.log")
-    launch = ["mujoco_sim", "sim.launch", "real_time_factor:=0", "output:=log", "camera_rate:=%g" % args.camera_rate]
-    with IsolatedLaunch(launch, log) as ros:
-        os.environ["ROS_MASTER_URI"] = ros.master_uri
-        ros.wait_for_master()
-        stats, rate = measure(args.sim_seconds, args.camera_rate, args.timeout)
+    stats, rate, log = run(args.sim_seconds, args.camera_rate, args.timeout, args.realism)
+    if args.json:
+        print(json.dumps(dict(stats, camera_rate_received=rate, log=log)))
+        return 0 if stats else 1
     if not stats:
         print("no statistics received from the simulator; see %s" % log)
         return 1

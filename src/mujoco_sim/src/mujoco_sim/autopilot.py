@@ -106,6 +106,14 @@ class Autopilot:
             return True
         return False
 
+    def shift_altitude_reference(self, step):
+        """The height it flies on jumped by ``step`` [m] (a new surface under the sonar): move the altitude
+        hold and the take-off target with it, so the drone stays where it is."""
+        if self.z_ref is not None:
+            self.z_ref += step
+        if self.takeoff_target_z is not None:
+            self.takeoff_target_z += step
+
     def touched_down(self, crashed):
         self.motor_thrust[:] = 0.0
         self._reset_loops()

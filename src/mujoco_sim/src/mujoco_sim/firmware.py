@@ -8,10 +8,11 @@ A real AR.Drone flies its velocity and altitude loops on what it measures, not o
   vehicle (the simulator blends the two by how much of the view the vehicle covers,
   landing_msgs.camera_footprint).
 - Height and climb rate: the accelerometer pulled towards the sonar height, i.e. the height above
-  whatever surface is below (the drone follows the terrain, and rises when the vehicle passes under it).
-  A sonar height far from the estimate is an outlier unless it persists ``surface_step_time``: then the
-  surface changed and the estimate takes the new height. Out of the sonar's range, the barometer's
-  changes carry the height on.
+  whatever surface is below (the drone follows gentle terrain). A sonar height far from the estimate is an
+  outlier unless it persists ``surface_step_time``: then the surface changed (the vehicle's edge passed
+  under) and the estimate takes the new height, while the altitude hold keeps the drone where it is (the
+  step is returned for the autopilot's reference; diving 1.7 m off a car's roof crashed it on the pad).
+  Out of the sonar's range, the barometer's changes carry the height on.
 
 Velocities are in the world frame here; the firmware works in its heading frame, which it knows exactly
 relative to its own body, so this is the same estimate (its yaw drift does not enter).
@@ -48,23 +49,27 @@ class FirmwareEstimator:
 
     def sonar(self, t, dt, height, baro_altitude):
         """A sonar height of base_link above the surface below [m] at ``t`` [s] (None when out of range or
-        invalid), ``dt`` [s] after the previous call, and the barometric altitude [m]."""
+        invalid), ``dt`` [s] after the previous call, and the barometric altitude [m]. Returns the step of a
+        surface change [m] (new height minus estimate), else 0."""
+        step = 0.0
         if height is None:
             if self.height is not None and self._baro_offset is not None:
                 self._correct(dt, baro_altitude - self._baro_offset)
-            return
+            return step
         if self.height is None:
             self.height, self.climb = height, 0.0
         elif abs(height - self.height) > self.p["surface_step"]:
             if self._step_since is None:
                 self._step_since = t
             if t - self._step_since < self.p["surface_step_time"]:
-                return  # an outlier, unless it persists
+                return step  # an outlier, unless it persists
+            step = height - self.height
             self.height = height  # the surface below changed: a new reference
         else:
             self._correct(dt, height)
         self._step_since = None
         self._baro_offset = baro_altitude - self.height
+        return step
 
     def _correct(self, dt, height):
         innovation = height - self.height

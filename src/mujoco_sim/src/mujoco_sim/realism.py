@@ -69,7 +69,6 @@ SCHEMA = {
     "gps_dropout_duration_s": Param(F, 0.0, 60.0, "s"),
     # sonar
     "sonar_outlier_rate": Param(F, 0.0, 1.0),
-    "sonar_beam_half_angle_deg": Param(F, 0.0, 45.0, "deg"),
     # on-board firmware
     "firmware_on_estimate": Param(B),
     "flow_surface_coupling": Param(B),

@@ -185,8 +185,11 @@ class Simulator:
         self.sun_direction = -towards_sun
         m, sun = self.model, self._mj.mj_name2id(self.model, self._mj.mjtObj.mjOBJ_LIGHT, "sun")
         if sun >= 0:
-            m.light_dir[sun] = self.sun_direction
-            m.light_pos[sun] = towards_sun  # 1 m back towards the sun: the drone is inside the shadow map's depth
+            # A light of mode 'track' is placed from light_dir0 and light_pos0 (its offset from the body), the
+            # others from light_dir and light_pos: set both. 1 m back towards the sun: the drone is inside the
+            # shadow map's depth.
+            m.light_dir[sun] = m.light_dir0[sun] = self.sun_direction
+            m.light_pos[sun] = m.light_pos0[sun] = towards_sun
             m.light_diffuse[sun] = r["sun_intensity"]
             m.light_castshadow[sun] = r["shadows"]
         m.vis.headlight.active = int(r["ambient_light"] > 0.0)
@@ -368,7 +371,9 @@ class Simulator:
             schedule["sonar"] = now + period
             distance = self.sonar()
             height = (distance + FOOT_CLEARANCE) * max(0.5, rotation[2, 2]) if math.isfinite(distance) else None
-            fw.sonar(now, period, height, self.altimeter()[0])
+            step = fw.sonar(now, period, height, self.altimeter()[0])
+            if step:
+                self.autopilot.shift_altitude_reference(step)
         if now >= schedule["flow"]:
             period = 1.0 / self.cfg["firmware"]["flow_rate_hz"]
             schedule["flow"] = now + period
@@ -561,38 +566,22 @@ class Simulator:
         return self.yaw_drift_rate * self.time + float(self.yaw_drift_walk.value[0])
 
     def sonar(self):
-        """Distance from the feet to the first surface below [m], +inf beyond the range: the nearest echo
-        within the beam (realism: a cone of sonar_beam_half_angle_deg around body -z, else that axis), and
-        now and then a spurious echo or none at all (sonar_outlier_rate)."""
+        """Distance from the feet to the first surface along the body's -z axis [m] (pad, vehicle body or
+        ground: whatever is below), +inf beyond the range, and now and then a spurious echo or none at all
+        (realism: sonar_outlier_rate)."""
         position, quat = self.drone_pose()
-        rotation = quat_to_matrix(quat)
-        geom = np.zeros(1, dtype=np.int32)
+        distance = self.sonar_distance_true(position, quat_to_matrix(quat))
         limit = self.cfg["sensors"]["sonar_max_range"]
-        distances = []
-        for direction in self._sonar_rays(rotation):
-            distance = self._mj.mj_ray(self.model, self.data, position, direction, None, 1, self.drone_body, geom)
-            if 0 <= distance <= limit:
-                # The echo's range along the beam axis: a slanted ray reaches the same surface further away.
-                distances.append(distance * float(direction @ -rotation[:, 2]))
         minimum = self.cfg["sensors"]["sonar_min_range"]
         outliers = self.realism["sonar_outlier_rate"]
         if outliers > 0.0 and self.rng["sonar_outlier"].random() < outliers:
             if self.rng["sonar_outlier"].random() < 0.5:
                 return math.inf  # no echo
-            true_range = min(distances) - FOOT_CLEARANCE if distances else limit
+            true_range = min(distance, limit) - FOOT_CLEARANCE
             return float(self.rng["sonar_outlier"].uniform(minimum, max(minimum, true_range)))  # an early echo
-        if not distances:
+        if distance > limit:
             return math.inf
-        return max(minimum, min(distances) - FOOT_CLEARANCE + self._noise("sonar", (self.noise or {}).get("sonar_std", 0)))
-
-    def _sonar_rays(self, rotation):
-        down = -rotation[:, 2]
-        angle = math.radians(self.realism["sonar_beam_half_angle_deg"])
-        if angle <= 0.0:
-            return (down,)
-        c, s = math.cos(angle), math.sin(angle)
-        x, y = rotation[:, 0], rotation[:, 1]
-        return (down, c * down + s * x, c * down - s * x, c * down + s * y, c * down - s * y)
+        return max(minimum, distance - FOOT_CLEARANCE + self._noise("sonar", (self.noise or {}).get("sonar_std", 0)))
 
     def altimeter(self):
         """Barometric altitude above the world origin [m] and pressure [hPa]."""

@@ -86,7 +86,7 @@ struct FilterParameters
   double observation_covariance = 9e-4;      ///< vision position variance per axis when the range is unknown [m^2]
   // With the camera's range to the pad known, the vision std is sqrt(floor^2 + (per_metre * range)^2): pixel
   // noise grows with the range, the drone's own position jitter (in every world fix) does not.
-  double observation_std_floor = 0.01;       ///< [m]
+  double observation_std_floor = 0.03;       ///< [m]
   double observation_std_per_metre = 0.0075; ///< [m/m]
   double gps_observation_covariance = 0.09;  ///< GPS position variance, per axis [m^2]
   /// A receiver's error drifts slowly (metres, over a minute), and the vision fixes carry the drone's own

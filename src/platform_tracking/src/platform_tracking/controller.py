@@ -3,9 +3,19 @@
 The velocity command is built in ``world`` and rotated into the *heading frame* at the very end
 (``ardrone/cmd_vel``: linear.x forward, linear.y left of the drone's yaw-only frame):
 
-    v_cmd = v_ff + kp * e + ki * integral(e)            (capped)
+    v_cmd = v_ff + (1 - w) ki * integral(e) + kp * e   (capped)
     e     = pad(t) - drone(t) + L * (v_pad(t) - v_drone)
-    v_ff  = v_pad(t + T_v)
+    v_ff  = v_pad(t + T_v + w T_f) - w v_pad(t)
+
+- ``w``: how much the drone's own velocity follows the vehicle under it (its firmware's optical flow over
+  the vehicle, flow_surface.py; 0 in the ideal world). The drone flies its command plus w times the
+  vehicle's velocity (as its firmware's flow blended it in, over ``T_f``, flow_time_lead): at w = 1 the
+  command is relative to the pad. The feed-forward then keeps only its lead, the change of the pad's
+  velocity over T_v + T_f (the drone's velocity loop lags a ramp as much relative to the pad as over the
+  ground: without it a back-and-forth's 1 m/s^2 ramps kept the drone 0.3 m off the pad), and the
+  integral (what the drone falls short by in absolute flight: drag, wind) is the firmware's business.
+  The integral is kept, not learnt, while w > 0.1: learnt there it held an estimate's bias, and turned
+  round with the travel frame at a back-and-forth's reversal it pushed the drone off the pad.
 
 - ``pad(t)`` comes from the *predicted* path (kalman_prediction_path); the prediction is ``age``
   seconds old when it arrives, so it is read at the current time, not at its stamp: that is the
@@ -190,9 +200,10 @@ class TrackingController:
         else:
             self.acceleration = np.zeros(2)
 
-    def world_velocity(self, t, drone: DroneState, pad: PadPrediction, accumulate=True):
-        """Horizontal velocity command in the world frame. ``accumulate`` False freezes the integral
-        (it still applies: at speed it holds what the drone's own velocity loop falls short by)."""
+    def world_velocity(self, t, drone: DroneState, pad: PadPrediction, accumulate=True, flow_weight=0.0):
+        """Horizontal velocity command in the world frame, as the drone flies it (see the module docstring for
+        ``flow_weight``). ``accumulate`` False freezes the integral (it still applies: at speed it holds what
+        the drone's own velocity loop falls short by)."""
         p = self.p
         error, relative_velocity = self.errors(t, drone, pad)
         error = error + p.lookahead * relative_velocity
@@ -215,12 +226,16 @@ class TrackingController:
         # holds against the wind must be re-learnt at once.)
         settled = self.turn_changed_at is None or t - self.turn_changed_at >= p.integral_turn_settle_time
         steady = settled and not turn_change and abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration
-        if accumulate and steady and np.hypot(*error) < p.integral_error_limit and p.integral_gain > 0.0:
+        if accumulate and steady and flow_weight <= 0.1 and np.hypot(*error) < p.integral_error_limit and \
+                p.integral_gain > 0.0:
             self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)
-        correction = clamp_norm(p.position_gain * error + p.integral_gain * (to_world @ self.integral),
+        w = min(1.0, max(0.0, flow_weight))
+        correction = clamp_norm(p.position_gain * error + (1.0 - w) * p.integral_gain * (to_world @ self.integral),
                                 p.max_correction_speed)
-        feed = self.pad_velocity(t, pad, ahead=p.velocity_lead)
+        feed = self.pad_velocity(t, pad, ahead=p.velocity_lead + w * p.flow_time_lead)
+        if w > 0.0:
+            feed = feed - w * pad_velocity
         return clamp_norm(feed + correction, p.max_horizontal_speed)
 
     @staticmethod

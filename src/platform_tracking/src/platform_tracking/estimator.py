@@ -43,6 +43,9 @@ from .params import EstimatorParams
 
 HISTORY_SPAN = 1.5  # seconds of past estimates kept for late GPS fixes [s]
 PAD_MAX_AGE = 1.0   # a pad state older than this is not used to correct the flow [s]
+SONAR_MAX_AGE = 0.2  # a sonar height older than this does not give the height above the pad [s]
+SONAR_PAD_GATE = 0.25  # ...nor one further than this from the estimated height above the pad (the Summit XL's pad is
+                       # 0.5 m above the ground: an echo from the ground must not pass) [m]
 
 
 def heading_to_world(vx, vy, yaw):
@@ -223,7 +226,10 @@ class DroneEstimator:
         self.surface = surface           # FlowSurface, or None: the flow is over the ground
         self.pad_state = None            # (time, position, velocity) of the pad, world frame
         self.vehicle_report = None       # (time, velocity xy, yaw rate) the vehicle reported
+        self.last_sonar_height = None    # (time, base_link above the surface the sonar sees) [s, m]
+        self.orientations = collections.deque()  # (time, orientation) of the last second of IMU messages
         self.unseen_velocity = (None, np.zeros(2))  # (time, world xy) of the vehicle's velocity the flow did not see
+        self.flow_weight = 0.0           # how much the flow follows the vehicle (0 ground .. 1 vehicle), blended as it
         self.history = collections.deque()  # (time, position, velocity) after each prediction
         self.horizontal = HorizontalFilter(params.position_process_noise, params.flow_bias_process_noise,
                                            params.flow_velocity_std, params.initial_flow_bias_std,
@@ -328,6 +334,9 @@ class DroneEstimator:
         w, x, y, z = w / norm, x / norm, y / norm, z / norm
         self._advance(t)
         self.orientation = (w, x, y, z)
+        self.orientations.append((t, self.orientation))
+        while self.orientations and self.orientations[0][0] < t - HISTORY_SPAN:
+            self.orientations.popleft()
         self.yaw = yaw_from_quaternion(w, x, y, z)
         self.tilt_cos = 1.0 - 2.0 * (x * x + y * y)
         return True
@@ -366,19 +375,43 @@ class DroneEstimator:
         blended in over the firmware's response time as the firmware blends each flow reading into its
         estimate (its accelerometer carries the fast part). Zero away from the vehicle or without a pad."""
         last_t, last = self.unseen_velocity
-        target = np.zeros(2)
+        target, weight = np.zeros(2), 0.0
         if self.surface is not None and self.surface.enabled and self.pad_state is not None and self.ready:
             pad_t, pad_position, pad_velocity = self.pad_state
             vehicle_velocity = self._vehicle_velocity(t)
             if abs(t - pad_t) <= PAD_MAX_AGE and vehicle_velocity is not None:
-                target = self.surface.seen_pad_velocity(self.estimate(t).position, self.orientation,
-                                                        pad_position + pad_velocity * (t - pad_t), vehicle_velocity)
-        if target.any():
+                pad_now = pad_position + pad_velocity * (t - pad_t)
+                weight = self.surface.weight(self._position_over(pad_now, t), self._orientation_at(t), pad_now,
+                                             vehicle_velocity)
+                target = weight * vehicle_velocity
+        if weight > 0.0:
             self.counters["flow_over_vehicle"] += 1
-        if last_t is None or t <= last_t:
+        if last_t is None or t <= last_t or self.surface is None:
+            self.flow_weight = weight
             return target
-        return last + (1.0 - math.exp(-(t - last_t) / self.surface.p.flow_time_constant)) * (target - last) \
-            if self.surface is not None else target
+        blend = 1.0 - math.exp(-(t - last_t) / self.surface.p.flow_time_constant)
+        self.flow_weight += blend * (weight - self.flow_weight)
+        return last + blend * (target - last)
+
+    def _orientation_at(self, t):
+        """The IMU orientation at ``t``: the last one not after it. The IMU and navdata arrive on their own
+        threads, and at a car's speed the view of the vehicle turns with the drone's pitch within 0.1 s."""
+        for stamp, orientation in reversed(self.orientations):
+            if stamp <= t + 1e-9:
+                return orientation
+        return self.orientation
+
+    def _position_over(self, pad_position, t):
+        """The drone's position for the view of the vehicle: the estimate, its height above the pad taken from
+        the sonar when that sees the pad or the vehicle (it measures the height the view depends on to a
+        centimetre; the estimate's altitude minus the pad filter's height was 0.2 m off at a car's speed,
+        which at the vehicle's edge of the view is 0.2 in the weight, 3 m/s at 15 m/s)."""
+        position = self.estimate(t).position.copy()
+        if self.last_sonar_height is not None and abs(t - self.last_sonar_height[0]) <= SONAR_MAX_AGE:
+            sonar_height = self.last_sonar_height[1]
+            if abs(position[2] - pad_position[2] - sonar_height) < SONAR_PAD_GATE:
+                position[2] = pad_position[2] + sonar_height
+        return position
 
     def gps(self, t, position, velocity=None):
         """GPS fix taken at ``t``: world position [m] and optionally world velocity [m/s]; returns whether it
@@ -450,6 +483,7 @@ class DroneEstimator:
             return False
         self._advance(t)
         height = (distance + self.p.foot_clearance) * max(0.5, self.tilt_cos)  # base_link above that surface
+        self.last_sonar_height = (t, height)
         if abs(height - self.vertical.p) > self.p.sonar_ground_gate:
             return False
         self._update_vertical(height, self.p.sonar_std ** 2)

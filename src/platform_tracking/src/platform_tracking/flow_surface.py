@@ -9,14 +9,16 @@ So, with ``w`` that weight and ``v_pad`` the vehicle's velocity:
     navdata velocity = v_drone - w v_pad          (the estimator adds w v_pad back)
     the drone flies at = command + w v_pad         (the tracker takes w v_pad off its command)
 
-The estimator works ``w v_pad`` out and publishes it (ardrone/flow_unseen_velocity); the tracker takes off
-exactly that. Being the same, an error in it does not move the drone off the pad: the estimate then
-believes the drone flies at its command while it drifts by the error, the vision fixes (placed with the
-estimate) show the pad drifting the other way, and the prediction's velocity, the tracker's feed-forward,
-makes up for it. The weight comes from the drone's estimated pose, the predicted pad and the vehicle's
-top (a rectangle around the pad, config/flow_surface_<vehicle>.yaml): the stack knows its drone's
-firmware as a calibration would tell it, not from the simulator.
+The estimator works ``w`` and ``w v_pad`` out, the latter from the vehicle's own velocity report (never
+from the pad filter, whose fixes it places itself), and publishes both (ardrone/flow_unseen_velocity).
+The tracker scales its feed-forward (the predicted pad velocity) by 1 - w: at w = 1 its command is the
+correction alone, relative to the pad, and no error of any absolute velocity (the report's noise and
+delay, the estimate's) moves the drone off it. The weight comes from the drone's estimated pose (its
+height from the sonar), the predicted pad and the vehicle's top (a rectangle around the pad,
+config/flow_surface_<vehicle>.yaml): the stack knows its drone's firmware as a calibration would tell it,
+not from the simulator.
 """
+import collections
 import math
 
 import numpy as np
@@ -70,3 +72,33 @@ class FlowSurface:
         """The part of the pad's velocity (world x, y) the flow takes off the drone's: w v_pad."""
         w = self.weight(drone_position, orientation_wxyz, pad_position, pad_velocity)
         return w * np.asarray(pad_velocity[:2], dtype=float)
+
+
+class WeightForecast:
+    """The flow's weight at a later instant: the latest, moved on along its slope over the last ``window``
+    seconds (a straight-line fit). The weight the tracker reads is a navdata old and its command reaches the
+    drone a link's delay later; descending over a car at 15 m/s the weight rose 0.2 in 0.1 s, and 0.1 of it
+    is 1.5 m/s the command does not take off."""
+
+    def __init__(self, window=0.1):
+        self.window = window
+        self.samples = collections.deque()  # (time, weight)
+
+    def add(self, t, weight):
+        if self.samples and t < self.samples[-1][0]:
+            self.samples.clear()  # time went back
+        self.samples.append((t, weight))
+        while len(self.samples) > 2 and self.samples[0][0] < t - self.window:
+            self.samples.popleft()
+
+    def at(self, t):
+        if not self.samples:
+            return 0.0
+        last_t, last = self.samples[-1]
+        if len(self.samples) < 2:
+            return last
+        times = np.array([s[0] for s in self.samples])
+        weights = np.array([s[1] for s in self.samples])
+        span = times - times.mean()
+        slope = float(span @ (weights - weights.mean()) / (span @ span)) if span @ span > 0.0 else 0.0
+        return min(1.0, max(0.0, last + slope * (t - last_t)))

@@ -31,7 +31,6 @@ unknown words) are dropped with a warning naming the topic and what was wrong, o
 problem every WARN_PERIOD (landing_msgs.input_check).
 """
 import collections
-import dataclasses
 import math
 import sys
 import threading
@@ -49,9 +48,9 @@ from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, String
 
-from .controller import DroneState, PadPrediction, TrackingController
+from .controller import DroneState, PadPrediction
 from .estimator import DroneEstimator
-from .flow_surface import FlowSurface
+from .flow_surface import FlowSurface, WeightForecast
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
 from .state_machine import Inputs, State, TrackingStateMachine
 
@@ -202,11 +201,12 @@ class EstimatorNode:
         with self.lock:
             self._at(t)
             self.estimator.flow(t, msg.vx, msg.vy, msg.vz)
-            unseen = self.estimator.unseen_velocity[1]
+            unseen, weight = self.estimator.unseen_velocity[1], self.estimator.flow_weight
         if self.surface.enabled:
             correction = Vector3Stamped()
             correction.header.stamp, correction.header.frame_id = msg.header.stamp, self.params.frame_id
             correction.vector.x, correction.vector.y = float(unseen[0]), float(unseen[1])
+            correction.vector.z = float(weight)  # the weight itself: 0 the flow sees the ground, 1 the vehicle
             self.pub_unseen.publish(correction)
 
     def on_gps(self, msg):
@@ -299,7 +299,8 @@ class TrackingNode:
         self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
         self.estimate = None          # (stamp, DroneState without sonar)
-        self.unseen = None            # (stamp, world xy) of the pad's velocity the drone's flow does not see
+        self.unseen = None            # (stamp, world xy, weight) of the vehicle's velocity the flow does not see
+        self.flow_weight = WeightForecast()
         self.sonar = None             # median of the last three sonar ranges (a spurious echo is one of them), or None
         self.sonar_ranges = collections.deque(maxlen=3)
         self.navdata_state = None
@@ -347,7 +348,9 @@ class TrackingNode:
         if problem:
             return self.rejections.reject("ardrone/flow_unseen_velocity", problem)
         with self.lock:
-            self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]))
+            self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]),
+                           float(msg.vector.z) if math.isfinite(msg.vector.z) else 0.0)
+            self.flow_weight.add(self.unseen[0], self.unseen[2])
 
     def on_path(self, msg):
         problem = header_problem(msg, WORLD_FRAMES[:1])
@@ -456,12 +459,14 @@ class TrackingNode:
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
                 state = self.estimate[1]
                 drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
-            unseen = self.unseen[1] if self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE else None
+            fresh = self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE
+            # The weight when the command reaches the drone: a navdata old now, and a link's delay later.
+            flow_weight = self.flow_weight.at(t + self.params.flow_weight_lead) if fresh else 0.0
             requests = self._take_requests()
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in requests, land="land" in requests,
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
-                            vision_age=None if self.seen_at is None else t - self.seen_at)
+                            vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight)
         before = self.machine.state
         out = self.machine.step(inputs)
         if out.send_takeoff:
@@ -469,7 +474,7 @@ class TrackingNode:
         if out.send_land:
             self.pub_land.publish(Empty())
         if out.command is not None:
-            command = self._firmware_command(out.command, drone, unseen)
+            command = out.command
             twist = Twist()
             twist.linear.x, twist.linear.y, twist.linear.z = command.vx, command.vy, command.vz
             twist.angular.z = command.yaw_rate
@@ -482,14 +487,6 @@ class TrackingNode:
             target.point.x, target.point.y, target.point.z = (float(v) for v in out.target)
             self.pub_target.publish(target)
         self.lockstep.ack(now)
-
-    def _firmware_command(self, command, drone, unseen):
-        """The drone flies its command relative to what its flow sees: over the vehicle, take off the part of
-        the vehicle's velocity the flow does not see, as the estimator worked it out (flow_surface.py)."""
-        if drone is None or unseen is None or not unseen.any() or self.machine.state == State.LANDED:
-            return command
-        forward, left = TrackingController.to_heading_frame(unseen, drone.yaw)
-        return dataclasses.replace(command, vx=command.vx - forward, vy=command.vy - left)
 
     def spin(self):
         wait_for_clock()

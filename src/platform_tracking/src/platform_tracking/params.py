@@ -134,6 +134,8 @@ class TrackingParams:
     integral_turn_settle_time: float = spec(1.0, 0.0, 60.0, "s")
     lookahead: float = spec(0.3, 0.0, 5.0, "s")
     velocity_lead: float = spec(0.15, 0.0, 5.0, "s")
+    flow_time_lead: float = spec(0.17, 0.0, 5.0, "s")
+    flow_weight_lead: float = spec(0.05, 0.0, 1.0, "s")
     acceleration_window: float = spec(0.5, 0.0, 10.0, "s")
     max_correction_speed: float = spec(3.0, 0.0, 40.0, "m/s")
     max_horizontal_speed: float = spec(20.0, 0.1, 40.0, "m/s")
@@ -173,6 +175,10 @@ class TrackingParams:
     abort_to_gate: bool = spec(True)
     blind_height: float = spec(0.35, 0.0, 5.0, "m")
     land_ack_timeout: float = spec(1.0, 0.05, 30.0, "s")
+    blend_weight_low: float = spec(0.1, 0.0, 1.0, "-")
+    blend_weight_high: float = spec(0.9, 0.0, 1.0, "-")
+    blend_min_pad_speed: float = spec(4.0, 0.0, 50.0, "m/s")
+    blend_descent_rate: float = spec(0.8, 0.05, 3.0, "m/s")
 
     def check(self, source="tracking parameters"):
         """Relations between parameters that a single range cannot express."""

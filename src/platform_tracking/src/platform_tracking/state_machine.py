@@ -80,6 +80,8 @@ class Inputs:
     force_land: bool = False
     landing_allowed: bool = True
     vision_age: Optional[float] = None      # time since the latest pad detection arrived [s]; None: never
+    flow_weight: float = 0.0                # how much the drone's own velocity follows the vehicle under it (0 the
+                                            # ground .. 1 the vehicle; ardrone/flow_unseen_velocity, flow_surface.py)
 
 
 @dataclasses.dataclass
@@ -101,6 +103,7 @@ class TrackingStateMachine:
         self.p = params.check()
         self.logger = logger or (lambda line: None)
         self.controller = TrackingController(params)
+        self._flow_weight = 0.0  # of the current step: how much the drone's own velocity follows the vehicle
         self.state = State.LANDED
         self.entered = 0.0                       # time the current state was entered
         self.takeoff_pending = False
@@ -197,12 +200,13 @@ class TrackingStateMachine:
         return VelocityCommand(vx, vy, vz, 0.0)
 
     def _tracking_xy(self, t, drone, pad, accumulate=True):
-        return self.controller.world_velocity(t, drone, pad, accumulate=accumulate)
+        return self.controller.world_velocity(t, drone, pad, accumulate=accumulate, flow_weight=self._flow_weight)
 
     # ----- the step ------------------------------------------------------------------------------
     def step(self, inputs: Inputs) -> Outputs:
         self._out = Outputs(state=self.state)
         t = inputs.time
+        self._flow_weight = inputs.flow_weight
         if inputs.pad is not None:
             self.last_pad = inputs.pad
         if inputs.takeoff:
@@ -429,9 +433,19 @@ class TrackingStateMachine:
                 climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
         elif at_gate:
             vz = climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
+        elif self._in_flow_blend(inp, pad, t):
+            # Where the drone's flow half sees the vehicle, its velocity swings with every change of what the
+            # camera covers (tilt, position): at a car's speed by metres per second. Holding there only makes
+            # the error grow; below, the flow sees the vehicle alone and the drone flies relative to it.
+            vz = -p.blend_descent_rate
         else:
             vz = 0.0  # outside the descent cone: hold the height, let the tracking catch up
         self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
+
+    def _in_flow_blend(self, inp, pad, t):
+        """The drone's flow follows the vehicle and the ground at once, over a fast vehicle."""
+        return self.p.blend_weight_low < inp.flow_weight < self.p.blend_weight_high and \
+            float(np.hypot(*pad.velocity[:2])) >= self.p.blend_min_pad_speed
 
     def _start_retry(self, reason, height, climb=True):
         """A new attempt at the gate: after a climb to retry_height, or (``climb`` False) from where the drone is."""

@@ -1,8 +1,10 @@
-// Pinhole camera looking at a horizontal plane: pixel <-> point on the pad plane (ROS-free).
+// Camera looking at a horizontal plane: pixel <-> point on the pad plane, and the lens (ROS-free).
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -10,13 +12,41 @@
 
 namespace uav_vision {
 
-// Intrinsics of an undistorted pinhole image [px], as in sensor_msgs/CameraInfo K.
+// The camera as in sensor_msgs/CameraInfo: pinhole intrinsics K [px] and the lens distortion D.
 struct CameraIntrinsics {
   double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
   int width = 0, height = 0;
+  // plumb_bob lens distortion (k1, k2, p1, p2, k3), as camera_info D; all zero: a perfect pinhole lens.
+  std::array<double, 5> distortion{};
 
   // Empty when usable, else what is wrong (e.g. "zero focal length").
   std::string problem() const;
+  bool distorted() const;
+  bool operator==(const CameraIntrinsics& other) const;
+  bool operator!=(const CameraIntrinsics& other) const { return !(*this == other); }
+};
+
+// Image pixel of an ideal pixel: the lens model forwards (e.g. to draw a detection on the image).
+cv::Point2d distortPixel(const CameraIntrinsics& intrinsics, const cv::Point2d& ideal);
+
+// Where the lens put each pixel: the image pixel <-> the pixel of the ideal pinhole image with the same K
+// ("undistorted" or "ideal" pixels; PlaneView works in those). Only the points that matter are moved, not
+// the image: a lookup table of every pixel's ideal position, computed once per camera (about 20 ms), makes
+// a contour point cost one memory read (remapping the whole image costs more than the detector: see
+// detector_benchmark).
+class LensUndistortion {
+ public:
+  explicit LensUndistortion(const CameraIntrinsics& intrinsics);
+
+  const CameraIntrinsics& intrinsics() const { return intrinsics_; }
+  // Ideal pixel of an image pixel (inside the image: the caller's contour points are).
+  const cv::Point2f& undistort(const cv::Point& pixel) const { return table_[pixel.y * intrinsics_.width + pixel.x]; }
+  void undistort(const std::vector<cv::Point>& pixels, std::vector<cv::Point2f>& ideal) const;
+  cv::Point2d distort(const cv::Point2d& ideal) const { return distortPixel(intrinsics_, ideal); }
+
+ private:
+  CameraIntrinsics intrinsics_;
+  std::vector<cv::Point2f> table_;  // row-major, one per pixel
 };
 
 // Pose of the camera's optical frame (x right, y down, z out of the lens) on the drone.
@@ -31,7 +61,8 @@ struct CameraMount {
 
 // The camera above the horizontal pad plane, at a known height and attitude. Points on the plane are
 // given as their horizontal offset (east, north in world-aligned axes) from the optical centre; the
-// plane lies `camera_height` below the optical centre.
+// plane lies `camera_height` below the optical centre. Pixels are ideal (pinhole) pixels: for a distorted
+// lens, undistorted first (LensUndistortion).
 class PlaneView {
  public:
   // world_from_body: drone attitude (IMU orientation, world <- base_link); camera_height above the plane [m].

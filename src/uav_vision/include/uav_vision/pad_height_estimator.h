@@ -44,8 +44,11 @@ class PadHeightEstimator {
   // sonar_range: ardrone/sonar_height range [m] (NaN when no recent reading, +inf when nothing in range);
   // baro_altitude: base_link above the ground [m] (NaN when none); world_from_body: IMU attitude.
   // hint: which surface the sonar points at according to the image (kUnknown if not known).
+  // sonar_half_angle: half the sonar's beam (sensor_msgs/Range field_of_view / 2) [rad]. A wide beam's first
+  // echo comes from the nearest point of the surface within it: straight below while the tilt is within
+  // the beam, else from the beam's edge nearest to the vertical; a narrow one (0) measures along body -z.
   HeightEstimate estimate(double sonar_range, double baro_altitude, const Eigen::Quaterniond& world_from_body,
-                          Surface hint = Surface::kUnknown) const;
+                          Surface hint = Surface::kUnknown, double sonar_half_angle = 0.0) const;
 
   const PadHeightParams& params() const { return params_; }
 

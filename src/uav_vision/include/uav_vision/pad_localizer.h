@@ -17,8 +17,8 @@ namespace uav_vision {
 struct PadLocalizerParams {
   PadDetectorParams detector;
   PadHeightParams height;
-  // The principal point this far inside (outside) the pad outline means the sonar, which looks along
-  // the optical axis, hits the pad (the ground) [px].
+  // The sonar's beam (around the optical axis) reaching this far inside the pad outline means its echo comes
+  // from the pad; all of it this far outside, from the ground [px].
   double sonar_footprint_margin_px = 4.0;
 };
 
@@ -40,9 +40,10 @@ class PadLocalizer {
   PadLocalizer(const PadLocalizerParams& params, const CameraMount& mount);
 
   // From the sensors: sonar range [m] (NaN: none recent, +inf: nothing in range), barometric altitude of
-  // base_link [m] (NaN: none), IMU attitude (world <- base_link).
+  // base_link [m] (NaN: none), IMU attitude (world <- base_link), half the sonar's beam width [rad].
   PadObservation observe(const cv::Mat& image, ColorOrder order, const CameraIntrinsics& intrinsics,
-                         const Eigen::Quaterniond& world_from_body, double sonar_range, double baro_altitude) const;
+                         const Eigen::Quaterniond& world_from_body, double sonar_range, double baro_altitude,
+                         double sonar_half_angle = 0.0) const;
 
   // With the camera height above the pad plane given directly [m].
   PadObservation observeAtHeight(const cv::Mat& image, ColorOrder order, const CameraIntrinsics& intrinsics,
@@ -52,7 +53,10 @@ class PadLocalizer {
   const PadHeightEstimator& heightEstimator() const { return height_estimator_; }
 
  private:
-  Surface surfaceUnderSonar(const Detection& detection) const;
+  // Which surface the sonar's first echo comes from, by the image: the pad when some of it lies within the
+  // beam's footprint around the optical axis, the ground when all of it lies well outside.
+  Surface surfaceUnderSonar(const Detection& detection, const CameraIntrinsics& intrinsics,
+                            double sonar_half_angle) const;
   void locate(const PlaneView& view, PadObservation& observation) const;
 
   PadLocalizerParams params_;

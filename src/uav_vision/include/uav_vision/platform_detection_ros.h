@@ -23,6 +23,7 @@
 
 #include "uav_vision/attitude_history.h"
 #include "uav_vision/pad_localizer.h"
+#include "uav_vision/reading_history.h"
 
 namespace uav_vision {
 
@@ -38,6 +39,7 @@ struct PlatformDetectionConfig {
   double imu_max_offset = 0.05;    // [s]
   double sonar_timeout = 0.2;      // [s]
   double altimeter_timeout = 0.5;  // [s]
+  double altimeter_window = 0.1;   // [s]
   double warn_period = 5.0;        // [s]
 
   // Reads every key of config/platform_detection.yaml from `pnh`; throws ConfigError naming the first
@@ -63,11 +65,8 @@ class PlatformDetectionRos {
   // nearest one (at most odom_timeout away) with its velocity. The estimate trails the camera by the
   // estimator's latency, and the drone moves by metres per second, so the newest one is not good enough.
   std::optional<Eigen::Vector3d> dronePositionAt(const ros::Time& stamp) const;
-  // A reading stamped within `timeout` of `stamp`, else NaN.
   // A stamp too far from the clock, or (``frame`` not empty) a frame other than ``frame``.
   std::optional<landing_msgs::InputProblem> inputProblem(const std_msgs::Header& header, const std::string& frame) const;
-  static double freshValue(const std::optional<std::pair<ros::Time, double>>& reading, const ros::Time& stamp,
-                           double timeout);
   void publish(const std_msgs::Header& image_header, const PadObservation& observation);
   void publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image, const PadObservation& observation,
                          const CameraIntrinsics& intrinsics);
@@ -82,7 +81,8 @@ class PlatformDetectionRos {
 
   std::optional<CameraIntrinsics> intrinsics_;
   AttitudeHistory attitudes_;  // the last second of IMU attitudes and rates
-  std::optional<std::pair<ros::Time, double>> sonar_, altitude_;
+  ReadingHistory sonar_ranges_, altitudes_;  // the last second of sonar ranges and barometric altitudes
+  double sonar_half_angle_ = 0.0;  // half the sonar's field_of_view [rad]
   struct PositionEstimate {
     ros::Time stamp;
     Eigen::Vector3d position, velocity;  // world frame [m], [m/s]
