@@ -10,5 +10,22 @@ else
   source "$_landing_ws/devel/setup.bash"
   export MUJOCO_GL="${MUJOCO_GL:-osmesa}"
   export ROS_PYTHON_VERSION=3
+  # Network: the ROS master and every node listen on this machine only (loopback), unless ROS_IP or ROS_HOSTNAME
+  # is set before this file is sourced (README, "Security"). roscpp's XML-RPC server ignores ROS_IP: the
+  # preloaded liblanding_loopback_bind.so keeps it on loopback too (landing_msgs/src/loopback_bind.c).
+  if [ -z "${ROS_IP:-}${ROS_HOSTNAME:-}" ] || [ "${LANDING_ROS_LOOPBACK:-}" = 1 ]; then
+    export ROS_IP=127.0.0.1 LANDING_ROS_LOOPBACK=1
+    unset ROS_HOSTNAME
+    _landing_shim="$_landing_ws/devel/lib/liblanding_loopback_bind.so"
+    case ":${LD_PRELOAD:-}:" in
+      *":$_landing_shim:"*) ;;
+      *) [ -f "$_landing_shim" ] && export LD_PRELOAD="$_landing_shim${LD_PRELOAD:+:$LD_PRELOAD}" ;;
+    esac
+    unset _landing_shim
+    [ "${ROS_MASTER_URI:-}" = http://localhost:11311 ] && export ROS_MASTER_URI=http://127.0.0.1:11311  # no DNS
+  else
+    export LANDING_ROS_LOOPBACK=0
+  fi
+  export ROS_MASTER_URI="${ROS_MASTER_URI:-http://127.0.0.1:11311}"
 fi
 unset _landing_ws

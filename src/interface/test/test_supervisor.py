@@ -490,3 +490,56 @@ def test_settings_name_a_missing_or_bad_key():
         Settings.from_mapping(dict(good, answer_timeout_s=-1))
     with pytest.raises(SettingsError, match="'answer_timeout_s' must be a number"):
         Settings.from_mapping(dict(good, answer_timeout_s=math.nan))
+
+
+# ----- restart after a crash (the node keeps snapshot() on the master) ---------------------------------------
+def restarted(before):
+    """A fresh supervisor restored from ``before``'s snapshot, at ``before``'s time and readings."""
+    after = Harness()
+    after.t, after.readings, after.flight = before.t, dict(before.readings), before.flight
+    snapshot = json.loads(json.dumps(before.sup.snapshot()))  # as stored: JSON
+    after.sup.restore(after.t, snapshot)
+    after.collect()
+    return after
+
+
+def test_a_restarted_supervisor_carries_on_in_its_mode_and_tells_the_tracker_again(flying):
+    after = restarted(flying)
+    assert after.sup.mode is Mode.LANDING
+    assert actions(after.decisions) == ["recovered"] and after.tracker == []
+    after.tick()  # the flight state is known: the tracker is told to carry on (a restarted tracker reads it)
+    assert after.tracker == ["takeoff"] and after.sup.landing_allowed
+    after.flight = Flight.LANDED  # the mission then ends as it would have
+    after.run(0.2)
+    assert after.sup.mode is Mode.LANDED and after.tracker[-1] == "hold"
+
+
+def test_no_take_off_again_for_a_mission_whose_drone_came_down_meanwhile(flying):
+    flying.flight = Flight.LANDED  # touched down while the supervisor was dead
+    after = restarted(flying)
+    after.tick()
+    assert "takeoff" not in after.tracker and after.sup.mode is Mode.LANDED
+    assert actions(after.decisions, "flight") == ["landed"]
+
+
+def test_an_answered_warning_stays_answered_after_a_restart(flying):
+    flying.run(0.5, drone_battery=35)  # below 40 %: no landing, a warning with a deadline
+    flying.command("continue")
+    after = restarted(flying)
+    after.run(20.0)  # longer than the 15 s answer timeout: no emergency landing
+    assert after.sup.mode is Mode.LANDING and "emergency_landing" not in actions(after.decisions)
+    assert not after.sup.landing_allowed and not after.sup.warning
+
+
+def test_an_unanswered_warning_is_raised_again_after_a_restart(flying):
+    flying.run(0.5, drone_battery=35)
+    after = restarted(flying)
+    after.run(16.0)
+    assert after.sup.mode is Mode.EMERGENCY
+
+
+def test_the_end_of_a_mission_tells_the_tracker_to_hold(flying):
+    flying.flight = Flight.LANDED
+    flying.run(0.2)
+    assert flying.sup.mode is Mode.LANDED and flying.tracker == ["hold"]
+    assert flying.command("landing")[0] and flying.tracker == ["hold", "takeoff"]  # the next mission

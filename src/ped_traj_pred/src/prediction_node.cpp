@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace ped_traj_pred
 {
@@ -166,15 +167,21 @@ void PredictionNode::onDetection(const geometry_msgs::PointStamped::ConstPtr& ms
                       detection_sub_.getTopic().c_str(), frame.c_str(), world_frame_.c_str());
     return;
   }
+  if (auto problem = inputProblem(msg->header, {{"point.x", position.x()}, {"point.y", position.y()},
+                                                {"point.z", position.z()}}, landing_msgs::kMaxPositionM))
+    return rejections_.reject(detection_sub_.getTopic(), *problem);
   const ros::Time stamp = stampOf(msg->header);
   logOutcome(filter_.addVision(stamp.toSec(), position, visionVariance(stamp)), detection_sub_.getTopic(), stamp);
 }
 
 void PredictionNode::onRelativeDetection(const geometry_msgs::PointStamped::ConstPtr& msg)
 {
+  // Relative to the drone: its height above the pad at most, and a camera's view across.
+  if (auto problem = inputProblem(msg->header, {{"point.x", msg->point.x}, {"point.y", msg->point.y},
+                                                {"point.z", msg->point.z}}, landing_msgs::kMaxAltitudeM))
+    return rejections_.reject(relative_sub_.getTopic(), *problem);
   const double range = std::sqrt(msg->point.x * msg->point.x + msg->point.y * msg->point.y + msg->point.z * msg->point.z);
-  if (std::isfinite(range))
-    last_range_ = std::make_pair(stampOf(msg->header), range);
+  last_range_ = std::make_pair(stampOf(msg->header), range);
 }
 
 double PredictionNode::visionVariance(const ros::Time& stamp) const
@@ -190,6 +197,20 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
 {
   const geometry_msgs::Point& p = msg->pose.pose.position;
   const geometry_msgs::Quaternion& q = msg->pose.pose.orientation;
+  if (auto problem = landing_msgs::frameProblem(msg->header.frame_id, world_frame_))
+    return rejections_.reject(gps_sub_.getTopic(), *problem);
+  if (auto problem = landing_msgs::stampProblem(msg->header.stamp, ros::Time::now()))
+    return rejections_.reject(gps_sub_.getTopic(), *problem);
+  // A NaN is dropped field by field below (a report without that part); a finite value must be plausible.
+  const geometry_msgs::Vector3& v = msg->twist.twist.linear;
+  for (const auto& [name, value, limit] : {std::tuple<const char*, double, double>{"position.x", p.x, landing_msgs::kMaxPositionM},
+                                           {"position.y", p.y, landing_msgs::kMaxPositionM},
+                                           {"twist.linear.x", v.x, landing_msgs::kMaxSpeedMps},
+                                           {"twist.linear.y", v.y, landing_msgs::kMaxSpeedMps},
+                                           {"twist.angular.z", msg->twist.twist.angular.z, landing_msgs::kMaxRateRadps}})
+    if (std::isfinite(value))
+      if (auto problem = landing_msgs::numberProblem(name, value, limit))
+        return rejections_.reject(gps_sub_.getTopic(), *problem);
   VehicleReport report;
   // Without a fix (a receiver in a dropout) the report still carries the vehicle's odometry; its position
   // variance then says "unknown".
@@ -244,6 +265,17 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   }
   const ros::Time stamp = stampOf(msg->header);
   logOutcome(filter_.addVehicleReport(stamp.toSec(), report), gps_sub_.getTopic(), stamp);
+}
+
+std::optional<landing_msgs::InputProblem> PredictionNode::inputProblem(
+    const std_msgs::Header& header, std::initializer_list<std::pair<const char*, double>> values, double limit) const
+{
+  if (auto problem = landing_msgs::stampProblem(header.stamp, ros::Time::now()))
+    return problem;
+  for (const auto& [name, value] : values)
+    if (auto problem = landing_msgs::numberProblem(name, value, limit))
+      return problem;
+  return std::nullopt;
 }
 
 void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp)

@@ -11,6 +11,7 @@ from geometry_msgs.msg import PoseStamped  # noqa: E402
 from nav_msgs.msg import Odometry, Path  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
+from landing_msgs.input_check import RosRejectionLog  # noqa: E402
 from platform_tracking import node  # noqa: E402
 from platform_tracking.params import TrackingParams  # noqa: E402
 
@@ -51,7 +52,8 @@ def bare_tracking_node():
     """A TrackingNode without publishers and subscribers (no master needed)."""
     n = node.TrackingNode.__new__(node.TrackingNode)
     n.lock = threading.Lock()
-    n.requests, n.path, n.pad_odom, n.prediction, n.estimate = set(), None, None, None, None
+    n.requests, n.path, n.pad_odom, n.prediction, n.estimate = [], None, None, None, None
+    n.rejections = RosRejectionLog()
     n.me = "/platform_tracking"
     return n
 
@@ -95,11 +97,11 @@ def test_own_takeoff_and_land_messages_are_ignored_others_are_requests(fake_ros)
     own = Empty()
     own._connection_header = {"callerid": "/platform_tracking"}
     n.on_thesis_request(own, "takeoff")
-    assert n.requests == set()
+    assert n.requests == []
     other = Empty()
     other._connection_header = {"callerid": "/operator_console"}
     n.on_thesis_request(other, "land")
-    assert n.requests == {"land"}
+    assert n.requests == ["land"]
 
 
 def test_operator_commands(fake_ros):
@@ -107,8 +109,35 @@ def test_operator_commands(fake_ros):
     n.on_command(String(data="force_land"))
     n.on_command(String(data="Takeoff "))
     n.on_command(String(data="jump"))
-    assert n.requests == {"force_land", "takeoff"}
-    assert "unknown command 'jump'" in fake_ros.log["warn"][-1]
+    assert n.requests == ["force_land", "takeoff"]
+    assert "/platform_tracking/command [unknown value]: command 'jump'" in fake_ros.log["warn"][-1]
+
+
+def test_garbage_is_dropped_once_per_topic_and_kind_with_what_was_wrong(fake_ros):
+    n = bare_tracking_node()
+    for _ in range(5):
+        n.on_command(String(data="jump"))
+    odom = Odometry()
+    odom.header.frame_id = "world"
+    odom.header.stamp = rospy.Time.from_sec(500.0)  # the clock says 10 s
+    n.on_pad_odom(odom)
+    odom.header.stamp = rospy.Time.from_sec(10.0)
+    odom.pose.pose.position.x = 1e30
+    n.on_pad_odom(odom)
+    assert n.pad_odom is None and n.requests == []
+    assert len([w for w in fake_ros.log["warn"] if "command 'jump'" in w]) == 1
+    assert any("/kalman_platform_odom [stamp from the future]" in w for w in fake_ros.log["warn"])
+    assert any("/kalman_platform_odom [out of range]: position[0] = 1e+30" in w for w in fake_ros.log["warn"])
+
+
+def test_a_hold_cancels_the_requests_before_it(fake_ros):
+    n = bare_tracking_node()
+    n.machine = node.TrackingStateMachine(TrackingParams())
+    n.on_command(String(data="takeoff"))
+    n.on_command(String(data="hold"))
+    n.on_command(String(data="land"))
+    n.machine.takeoff_pending = True  # a take-off the machine was still waiting to act on
+    assert n._take_requests() == ["land"] and not n.machine.takeoff_pending and n.requests == []
 
 
 def test_prediction_assembly_from_path_and_odometry():

@@ -170,6 +170,11 @@ void PlatformDetectionRos::onImu(const sensor_msgs::ImuConstPtr& msg) {
     return;
   }
   const auto& w = msg->angular_velocity;
+  if (auto problem = inputProblem(msg->header, config_.base_frame)) return rejections_.reject(imu_sub_.getTopic(), *problem);
+  for (const auto& [name, value] : {std::pair<const char*, double>{"angular_velocity.x", w.x}, {"angular_velocity.y", w.y},
+                                    {"angular_velocity.z", w.z}})
+    if (auto problem = landing_msgs::numberProblem(name, value, landing_msgs::kMaxRateRadps))
+      return rejections_.reject(imu_sub_.getTopic(), *problem);
   // angular_velocity_covariance[0] == -1: no rates (REP 145); the attitude is then held between samples.
   const Eigen::Vector3d body_rate = msg->angular_velocity_covariance[0] == -1.0 ? Eigen::Vector3d::Zero()
                                                                                  : Eigen::Vector3d(w.x, w.y, w.z);
@@ -183,6 +188,7 @@ void PlatformDetectionRos::onSonar(const sensor_msgs::RangeConstPtr& msg) {
                       msg->range);
     return;
   }
+  if (auto problem = inputProblem(msg->header, config_.base_frame)) return rejections_.reject(sonar_sub_.getTopic(), *problem);
   if (!(msg->field_of_view >= 0.0 && msg->field_of_view < M_PI)) {
     ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a reading whose field_of_view %f is not in [0, pi) rad",
                       sonar_sub_.getTopic().c_str(), msg->field_of_view);
@@ -197,6 +203,10 @@ void PlatformDetectionRos::onAltimeter(const landing_msgs::AltimeterConstPtr& ms
     ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a non-finite altitude", altimeter_sub_.getTopic().c_str());
     return;
   }
+  if (auto problem = landing_msgs::numberProblem("altitude", msg->altitude, landing_msgs::kMaxAltitudeM))
+    return rejections_.reject(altimeter_sub_.getTopic(), *problem);
+  if (auto problem = inputProblem(msg->header, ""))  // an altitude above the ground: any frame
+    return rejections_.reject(altimeter_sub_.getTopic(), *problem);
   altitudes_.add(msg->header.stamp.toSec(), msg->altitude);
 }
 
@@ -211,10 +221,16 @@ void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg)
                       odom_sub_.getTopic().c_str(), msg->header.frame_id.c_str(), config_.world_frame.c_str());
     return;
   }
+  for (const auto& [name, value] : {std::pair<const char*, double>{"position.x", p.x}, {"position.y", p.y}, {"position.z", p.z}})
+    if (auto problem = landing_msgs::numberProblem(name, value, landing_msgs::kMaxPositionM))
+      return rejections_.reject(odom_sub_.getTopic(), *problem);
+  if (auto problem = inputProblem(msg->header, "")) return rejections_.reject(odom_sub_.getTopic(), *problem);
   const auto& v = msg->twist.twist.linear;
   const Eigen::Vector3d velocity =
-      std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) ? Eigen::Vector3d(v.x, v.y, v.z)
-                                                                     : Eigen::Vector3d::Zero();
+      std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) &&
+              Eigen::Vector3d(v.x, v.y, v.z).norm() <= landing_msgs::kMaxSpeedMps
+          ? Eigen::Vector3d(v.x, v.y, v.z)
+          : Eigen::Vector3d::Zero();
   const ros::Time stamp = msg->header.stamp;
   if (!estimates_.empty() && stamp < estimates_.back().stamp) estimates_.clear();  // time jumped back
   estimates_.push_back({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity});
@@ -235,6 +251,13 @@ std::optional<Eigen::Vector3d> PlatformDetectionRos::dronePositionAt(const ros::
   const double offset = (stamp - nearest.stamp).toSec();
   if (std::abs(offset) > config_.odom_timeout) return std::nullopt;
   return nearest.position + offset * nearest.velocity;
+}
+
+std::optional<landing_msgs::InputProblem> PlatformDetectionRos::inputProblem(const std_msgs::Header& header,
+                                                                           const std::string& frame) const {
+  if (auto problem = landing_msgs::stampProblem(header.stamp, ros::Time::now())) return problem;
+  if (!frame.empty()) return landing_msgs::frameProblem(header.frame_id, frame);
+  return std::nullopt;
 }
 
 void PlatformDetectionRos::onImage(const sensor_msgs::ImageConstPtr& msg) {
@@ -261,6 +284,10 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
       msg->data.size() < size_t(msg->step) * msg->height) {
     ROS_WARN_THROTTLE(period, "%s: dropped a %ux%u frame whose step (%u) or data size (%zu) does not fit", topic,
                       msg->width, msg->height, msg->step, msg->data.size());
+    return;
+  }
+  if (auto problem = inputProblem(msg->header, "")) {
+    rejections_.reject(topic_name, *problem);
     return;
   }
   if (!intrinsics_) {

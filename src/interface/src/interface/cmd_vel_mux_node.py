@@ -1,14 +1,20 @@
 """cmd_vel_mux node: forwards manual/cmd_vel, emergency/cmd_vel or platform_tracking/cmd_vel to
-ardrone/cmd_vel at ``~rate_hz`` (sim time) according to supervisor/mode; see interface.cmd_vel_mux."""
+ardrone/cmd_vel at ``~rate_hz`` (sim time) according to supervisor/mode; see interface.cmd_vel_mux.
+
+Garbage is dropped with a throttled warning saying what was wrong: a command with a non-finite or implausible
+velocity never reaches the drone (its input counts as silent), and an unknown mode leaves the last valid one in
+force (the supervisor publishes its mode only when it changes). Restarted after a crash (respawn in
+supervisor.launch), it reads the latched supervisor/mode again."""
 import sys
 
 import rospy
 from geometry_msgs.msg import Twist
+from landing_msgs.input_check import MAX_RATE_RADPS, MAX_SPEED_MPS, RosRejectionLog, numbers_problem
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.rospy_node import run_node, spin_at
 from std_msgs.msg import String
 
-from .cmd_vel_mux import CommandSelector
+from .cmd_vel_mux import ALLOWED, CommandSelector
 
 TOPICS = {"manual": "manual/cmd_vel", "emergency": "emergency/cmd_vel", "tracking": "platform_tracking/cmd_vel"}
 
@@ -25,6 +31,7 @@ class MuxNode:
         self.rate_hz = _positive_param("rate_hz", 30.0)
         self.selector = CommandSelector(_positive_param("input_timeout_s", 0.5))
         self.selected = None
+        self.rejections = RosRejectionLog()
         self.pub = rospy.Publisher("ardrone/cmd_vel", Twist, queue_size=1)
         self.pub_selected = rospy.Publisher("cmd_vel_mux/selected", String, queue_size=1, latch=True)
         for name, topic in TOPICS.items():
@@ -35,13 +42,19 @@ class MuxNode:
 
     def _input(self, name):
         def callback(msg):
+            problem = numbers_problem(MAX_SPEED_MPS, linear=(msg.linear.x, msg.linear.y, msg.linear.z)) or \
+                numbers_problem(MAX_RATE_RADPS, angular=(msg.angular.x, msg.angular.y, msg.angular.z))
+            if problem:
+                return self.rejections.reject(TOPICS[name], problem)
             self.selector.on_input(name, rospy.get_time(), msg)
         return callback
 
     def _on_mode(self, msg):
-        complaint = self.selector.set_mode(msg.data)
-        if complaint:
-            rospy.logwarn("cmd_vel_mux: %s", complaint)
+        if msg.data not in ALLOWED:
+            return self.rejections.reject("supervisor/mode", (
+                "unknown value", "mode %r, expected one of %s; the mode stays %s" % (
+                    msg.data[:60], ", ".join(m for m in ALLOWED if m), self.selector.mode)))
+        self.selector.set_mode(msg.data)
 
     def tick(self):
         now = rospy.Time.now()

@@ -4,12 +4,18 @@ Engages when supervisor/mode is ``emergency`` (or at once with ``~engage: immedi
 emergency.launch on its own). Publishes emergency/cmd_vel (forwarded by cmd_vel_mux), ardrone/land,
 emergency/position (landing_msgs/PositionXYCommand, from ardrone/odom_estimate, else ardrone/gps/odom)
 every ``~report_period_s`` until ``ack`` on operator/command, and emergency/state (latched phase).
+
+Restarted after a crash (respawn in emergency.launch) it reads the latched supervisor/mode and carries on: in
+emergency mode it lands (or, on the ground already, reports the coordinates again until acknowledged).
+Garbage on an input is dropped with a throttled warning saying what was wrong.
 """
 import sys
 import threading
 
 import rospy
 from geometry_msgs.msg import PointStamped, Twist
+from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, RosRejectionLog, choice_problem, first_problem,
+                                      frame_problem, numbers_problem, stamp_problem)
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
 from landing_msgs.rospy_node import run_node, spin_at
@@ -18,9 +24,18 @@ from sensor_msgs.msg import Range
 from std_msgs.msg import Empty, String
 
 from .emergency import EmergencyLanding, EmergencySettings, Phase, SettingsError
+from .supervisor import OPERATOR_COMMANDS, Mode
 from .supervisor_measures import flight_from_navdata
 
 ENGAGE = ("on_mode", "immediately")
+MODES = tuple(mode.value for mode in Mode)
+NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes
+WORLD_FRAME, BODY_FRAME = "world", "ardrone/base_link"  # docs/conventions.md
+
+
+def _header_problem(msg, frame=None):
+    return first_problem(stamp_problem(msg.header.stamp.to_sec(), rospy.get_time()),
+                         frame_problem(msg.header.frame_id, frame) if frame else None)
 
 
 class EmergencyNode:
@@ -48,24 +63,42 @@ class EmergencyNode:
         self.state_sent = Phase.INACTIVE
         self.lockstep = LockstepAcker(period=1.0 / self.rate_hz)
 
-        rospy.Subscriber("supervisor/mode", String, self._locked(lambda m: self.pending.append(("mode", m.data))),
-                         queue_size=5)
-        rospy.Subscriber("operator/command", String, self._locked(self._on_operator), queue_size=10)
-        rospy.Subscriber("ardrone/odom_estimate", Odometry, self._locked(self._estimate("odom_estimate")),
-                         queue_size=1)
-        rospy.Subscriber("ardrone/gps/odom", Odometry, self._locked(self._estimate("gps")), queue_size=1)
-        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped,
-                         self._locked(lambda m: self.core.on_pad(rospy.get_time(), m.point.x, m.point.y)),
-                         queue_size=1)
-        rospy.Subscriber("ardrone/altimeter", Altimeter,
-                         self._locked(lambda m: self.core.on_altitude(rospy.get_time(), m.altitude)), queue_size=1)
-        rospy.Subscriber("ardrone/sonar_height", Range,
-                         self._locked(lambda m: self.core.on_sonar(rospy.get_time(), m.range)), queue_size=1)
-        rospy.Subscriber("ardrone/navdata", Navdata, self._locked(
+        self.rejections = RosRejectionLog()
+        checked = self._checked
+        rospy.Subscriber("supervisor/mode", String, checked(
+            "supervisor/mode", lambda m: choice_problem(m.data, MODES, "mode"),
+            lambda m: self.pending.append(("mode", m.data))), queue_size=5)
+        rospy.Subscriber("operator/command", String, checked(
+            "operator/command", lambda m: choice_problem(m.data.strip().lower(), OPERATOR_COMMANDS, "command"),
+            self._on_operator), queue_size=10)
+        position_problem = lambda m: _header_problem(m, WORLD_FRAME) or numbers_problem(  # noqa: E731
+            MAX_POSITION_M, position=(m.pose.pose.position.x, m.pose.pose.position.y))
+        rospy.Subscriber("ardrone/odom_estimate", Odometry, checked(
+            "ardrone/odom_estimate", position_problem, self._estimate("odom_estimate")), queue_size=1)
+        rospy.Subscriber("ardrone/gps/odom", Odometry, checked(
+            "ardrone/gps/odom", position_problem, self._estimate("gps")), queue_size=1)
+        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, checked(
+            "platform/current_platform_position_in_ardrone",
+            lambda m: _header_problem(m, BODY_FRAME) or numbers_problem(MAX_ALTITUDE_M, point=(m.point.x, m.point.y)),
+            lambda m: self.core.on_pad(rospy.get_time(), m.point.x, m.point.y)), queue_size=1)
+        rospy.Subscriber("ardrone/altimeter", Altimeter, checked(
+            "ardrone/altimeter", lambda m: _header_problem(m) or numbers_problem(MAX_ALTITUDE_M, altitude=m.altitude),
+            lambda m: self.core.on_altitude(rospy.get_time(), m.altitude)), queue_size=1)
+        rospy.Subscriber("ardrone/sonar_height", Range, checked(
+            "ardrone/sonar_height", lambda m: _header_problem(m, BODY_FRAME) or (
+                ("out of range", "range is %s" % m.range) if not m.range >= 0.0 else None),  # +inf: no echo
+            lambda m: self.core.on_sonar(rospy.get_time(), m.range)), queue_size=1)
+        rospy.Subscriber("ardrone/navdata", Navdata, checked(
+            "ardrone/navdata", lambda m: choice_problem(m.state, NAVDATA_STATES, "state") or _header_problem(m),
             lambda m: self.core.on_flight(rospy.get_time(), flight_from_navdata(m.state))), queue_size=1)
 
-    def _locked(self, callback):
+    def _checked(self, topic, problem_of, callback):
+        """A subscriber callback that drops a message ``problem_of`` finds fault with, else runs ``callback``
+        under the lock."""
         def locked(msg):
+            problem = problem_of(msg)
+            if problem:
+                return self.rejections.reject(topic, problem)
             with self.lock:
                 callback(msg)
         return locked

@@ -131,7 +131,7 @@ class StationModel:
         console = self.console
         emergency = None
         if console.emergency_position is not None:
-            emergency = {"x": round(console.emergency_position[0], 2), "y": round(console.emergency_position[1], 2),
+            emergency = {"x": _rounded(console.emergency_position[0], 2), "y": _rounded(console.emergency_position[1], 2),
                          "acknowledged": self.emergency_acknowledged}
         countdown = console.auto_takeoff_in(self.t) if self.screen() == "flight_management" else None
         return {

@@ -9,7 +9,9 @@ In:  supervisor/{mode,decisions,warning,flight_management}, platform_tracking/{s
 Out: operator/command (std_msgs/String), the condition parameters (as rosparam set), and Manual Control:
      ardrone/cmd_vel (remapped to manual/cmd_vel), ardrone/takeoff, ardrone/land.
 Serves http://HOST:PORT/ (~host, ~port); writes the URL to ~url. A non-loopback host needs the token it
-prints. Everything it reads is what a real ground station would have: no ground truth.
+prints. Everything it reads is what a real ground station would have: no ground truth. Garbage on an input
+(text that is not a JSON object, unknown modes or tracker states) is dropped with a throttled warning; non-finite
+numbers are shown as unknown (station_model), never sent to a page.
 """
 import asyncio
 import json
@@ -18,6 +20,9 @@ import time
 
 import rospy
 from geometry_msgs.msg import PointStamped
+from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
+                                      first_problem, frame_problem, numbers_problem, stamp_problem)
+from platform_tracking.state_machine import State as TrackerState
 from landing_msgs.msg import Altimeter, PositionXYCommand
 from landing_msgs.rospy_node import init_node
 from nav_msgs.msg import Odometry, Path
@@ -33,6 +38,32 @@ from .station_manual import ManualControl
 from .station_model import StationModel, translate_odometry, translate_path, translate_point
 from .station_protocol import CONDITIONS
 from .station_server import StationServer
+from .supervisor import Mode
+
+MODES = tuple(mode.value for mode in Mode)
+TRACKER_STATES = tuple(state.value for state in TrackerState)
+
+
+def _header_problem(msg, frame="world"):
+    """A stamp from another time, or (``frame`` not None) a frame other than the world."""
+    return first_problem(stamp_problem(msg.header.stamp.to_sec(), rospy.get_time()),
+                         frame_problem(msg.header.frame_id, frame) if frame else None)
+
+
+def _odometry_problem(msg):
+    p, v = msg.pose.pose.position, msg.twist.twist.linear
+    return _header_problem(msg) or numbers_problem(MAX_POSITION_M, position=(p.x, p.y, p.z)) or \
+        numbers_problem(MAX_SPEED_MPS, velocity=(v.x, v.y))
+
+
+def _strict_json(text):
+    """A JSON object from ``text``: ValueError for anything else (NaN and Infinity included: a page cannot read them)."""
+    def no_constants(name):
+        raise ValueError("%s is not JSON" % name)
+    value = json.loads(text, parse_constant=no_constants) if text else {}
+    if not isinstance(value, dict):
+        raise ValueError("a JSON %s, not an object" % type(value).__name__)
+    return value
 
 NODE_PARAMS = {  # private parameter: (type, lowest, highest); config/station.yaml
     "port": (int, 0, 65535),
@@ -160,25 +191,51 @@ class StationNode:
                         setattr(self.model.console, name, convert(msg))
             return callback
 
+        self.rejections = RosRejectionLog()
+
+        def word(topic, allowed, what, update):
+            def callback(msg):
+                problem = choice_problem(msg.data, allowed, what)
+                if problem:
+                    return self.rejections.reject(topic, problem)
+                update(msg)
+            return callback
+
         sub = rospy.Subscriber
-        sub("supervisor/mode", String, setter(mode=lambda m: m.data))
-        sub("supervisor/decisions", String, self._json(self.model.on_decision), queue_size=100)
-        sub("supervisor/warning", String, self._json(self.model.console.on_warning))
-        sub("supervisor/flight_management", String, self._json(self.model.console.on_flight_management))
-        sub("platform_tracking/state", String, setter(tracker_state=lambda m: m.data))
-        sub("platform_tracking/target", PointStamped, setter(target_xy=translate_point), queue_size=1)
-        sub("emergency/position", PositionXYCommand, setter(emergency_position=translate_point), queue_size=1)
-        sub("ardrone/sonar_height", Range, setter(height=lambda m: m.range), queue_size=1)
-        sub("ardrone/altimeter", Altimeter, self._locked(lambda m: setattr(self.model, "altitude", m.altitude)),
-            queue_size=1)
-        sub("ardrone/odom_estimate", Odometry, self._locked(lambda m: self.model.on_drone(translate_odometry(m))),
-            queue_size=1)
-        sub("summit_xl/gps/odom", Odometry,
-            self._locked(lambda m: setattr(self.model, "vehicle", translate_odometry(m))), queue_size=1)
-        sub("kalman_platform_odom", Odometry,
-            self._locked(lambda m: setattr(self.model, "pad", translate_point(m.pose.pose.position))), queue_size=1)
-        sub("kalman_prediction_path", Path,
-            self._locked(lambda m: setattr(self.model, "prediction", translate_path(m))), queue_size=1)
+        sub("supervisor/mode", String, word("supervisor/mode", MODES, "mode", setter(mode=lambda m: m.data)))
+        sub("supervisor/decisions", String, self._json("supervisor/decisions", self.model.on_decision), queue_size=100)
+        sub("supervisor/warning", String, self._json("supervisor/warning", self.model.console.on_warning))
+        sub("supervisor/flight_management", String, self._json("supervisor/flight_management",
+                                                                self.model.console.on_flight_management))
+        sub("platform_tracking/state", String, word("platform_tracking/state", TRACKER_STATES, "tracker state",
+                                                    setter(tracker_state=lambda m: m.data)))
+        checked = self._checked
+        sub("platform_tracking/target", PointStamped, checked(
+            "platform_tracking/target", lambda m: _header_problem(m) or numbers_problem(
+                MAX_POSITION_M, point=(m.point.x, m.point.y)), setter(target_xy=translate_point)), queue_size=1)
+        sub("emergency/position", PositionXYCommand, checked(
+            "emergency/position", lambda m: numbers_problem(MAX_POSITION_M, position=(m.x, m.y)),
+            setter(emergency_position=translate_point)), queue_size=1)
+        sub("ardrone/sonar_height", Range, checked(
+            "ardrone/sonar_height", lambda m: _header_problem(m, None) or (
+                ("out of range", "range is %s" % m.range) if not m.range >= 0.0 else None),  # +inf: no echo
+            setter(height=lambda m: m.range)), queue_size=1)
+        sub("ardrone/altimeter", Altimeter, checked(
+            "ardrone/altimeter", lambda m: _header_problem(m, None) or numbers_problem(MAX_ALTITUDE_M, altitude=m.altitude),
+            self._locked(lambda m: setattr(self.model, "altitude", m.altitude))), queue_size=1)
+        sub("ardrone/odom_estimate", Odometry, checked(
+            "ardrone/odom_estimate", _odometry_problem,
+            self._locked(lambda m: self.model.on_drone(translate_odometry(m)))), queue_size=1)
+        sub("summit_xl/gps/odom", Odometry, checked(
+            "summit_xl/gps/odom", _odometry_problem,
+            self._locked(lambda m: setattr(self.model, "vehicle", translate_odometry(m)))), queue_size=1)
+        sub("kalman_platform_odom", Odometry, checked(
+            "kalman_platform_odom", _odometry_problem,
+            self._locked(lambda m: setattr(self.model, "pad", translate_point(m.pose.pose.position)))), queue_size=1)
+        sub("kalman_prediction_path", Path, checked(
+            "kalman_prediction_path", lambda m: _header_problem(m) or numbers_problem(
+                MAX_POSITION_M, position=[c for p in m.poses for c in (p.pose.position.x, p.pose.position.y)]),
+            self._locked(lambda m: setattr(self.model, "prediction", translate_path(m)))), queue_size=1)
         for name, topic in SENSOR_TOPICS.items():
             sub(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
 
@@ -189,13 +246,21 @@ class StationNode:
                 update(msg)
         return callback
 
-    def _json(self, update):
+    def _checked(self, topic, problem_of, callback):
+        """A subscriber callback that drops a message ``problem_of`` finds fault with, else runs ``callback``."""
+        def checked(msg):
+            problem = problem_of(msg)
+            if problem:
+                return self.rejections.reject(topic, problem)
+            callback(msg)
+        return checked
+
+    def _json(self, topic, update):
         def callback(msg):
             try:
-                value = json.loads(msg.data) if msg.data else {}
-            except ValueError:
-                rospy.logwarn_throttle(10.0, "station: not JSON on a supervisor topic: %r" % msg.data[:80])
-                return
+                value = _strict_json(msg.data)
+            except ValueError as err:
+                return self.rejections.reject(topic, ("malformed", "%s: %r" % (err, msg.data[:80])))
             with self.lock:
                 update(value)
         return callback

@@ -45,8 +45,9 @@ WARNING_OPTIONS = ["manual", "emergency", "continue"]
 REASON_TEXT = {"weather": "weather", "battery": "battery", "controller_battery": "controller battery",
                "drone_speed": "drone speed", "platform_too_fast": "platform too fast for the drone",
                "target_lost": "target lost", "sensor_missing": "sensor missing"}
-# What the tracker is told when a mode starts (platform_tracking/command).
-TRACKER_COMMAND = {Mode.LANDING: "takeoff", Mode.MANUAL: "hold", Mode.EMERGENCY: "hold"}
+# What the tracker is told when a mode starts (platform_tracking/command, latched: a restarted tracker reads the
+# last one, so "hold" once the mission is over keeps it from taking off again).
+TRACKER_COMMAND = {Mode.LANDING: "takeoff", Mode.MANUAL: "hold", Mode.EMERGENCY: "hold", Mode.LANDED: "hold"}
 
 
 class SettingsError(ValueError):
@@ -153,6 +154,35 @@ class Supervisor:
         self._decisions, self._tracker_commands = [], []
         self._waiting_commands = []      # operator commands held until every condition has been read once
         self._conditions_known = False   # a tick has run and no measurement was still pending
+        self._resend_tracker_command = False  # restored after a crash: tell the tracker again once the flight is known
+        self._restored_acknowledged = set()   # rows the operator had acknowledged before the crash
+
+    # ----- recovery after a crash -----------------------------------------------------------------------
+    def snapshot(self):
+        """What a restarted supervisor needs to carry on where this one stopped (the node keeps it on the
+        parameter server, which outlives the node)."""
+        return {"mode": self.mode.value, "emergency_acknowledged": self.emergency_acknowledged,
+                "operator_chose": self._operator_chose, "started": self._started,
+                "flight_management_open": self._flight_management_open, "idle_since": self._idle_since,
+                "auto_takeoff_announced": self._auto_takeoff_announced, "airborne_in_mode": self._airborne_in_mode,
+                "acknowledged": sorted(name for name, state in self.states.items()
+                                       if state.present and state.acknowledged)}
+
+    def restore(self, t, snapshot):
+        """Carry on from the snapshot() of a supervisor that died. The conditions are read afresh: one present
+        now is armed again (its re-checks and answer deadline start over) unless the operator had acknowledged
+        it. The tracker is told the mode's command again once the flight state is known."""
+        self.mode = Mode(snapshot["mode"])
+        self.emergency_acknowledged = bool(snapshot["emergency_acknowledged"])
+        self._operator_chose, self._started = bool(snapshot["operator_chose"]), bool(snapshot["started"])
+        self._flight_management_open = bool(snapshot["flight_management_open"])
+        self._idle_since = snapshot["idle_since"]
+        self._auto_takeoff_announced = bool(snapshot["auto_takeoff_announced"])
+        self._airborne_in_mode = bool(snapshot["airborne_in_mode"])
+        self._restored_acknowledged = set(snapshot.get("acknowledged", []))
+        self._resend_tracker_command = True
+        self._decide(t, "supervisor", None, "recovered", "restarted after a crash: carrying on in mode %s"
+                     % self.mode.value, snapshot)
 
     # ----- outputs ---------------------------------------------------------------------------------
     def take_outputs(self):
@@ -204,6 +234,7 @@ class Supervisor:
         parameter as read, or a measurement; MISSING when absent); ``flight``: Flight."""
         if self._idle_since is None and self._flight_management_open:
             self._idle_since = t
+        self._tell_tracker_again(flight)
         self._follow_flight(t, flight)
         for row in self.table:
             state = self.states[row.name]
@@ -212,7 +243,10 @@ class Supervisor:
             if evaluation.present and not was_present:
                 state.reset()
                 state.present, state.since, state.evaluation = True, t, evaluation
-                self._arm(t, state)
+                if row.name in self._restored_acknowledged:
+                    state.acknowledged = True  # the operator's answer from before the crash still holds
+                else:
+                    self._arm(t, state)
             elif was_present and not evaluation.present:
                 self._clear(t, state, evaluation)
             elif evaluation.present:
@@ -223,6 +257,7 @@ class Supervisor:
                 self._follow_up(t, state)
             else:
                 state.evaluation = evaluation
+        self._restored_acknowledged = set()
         self._conditions_known = not any(raw is PENDING for raw in readings.values())
         if self._conditions_known:
             waiting, self._waiting_commands = self._waiting_commands, []
@@ -231,6 +266,20 @@ class Supervisor:
         self._auto_takeoff(t)
         self._update_landing_allowed(t)
         self._update_warning()
+
+    def _tell_tracker_again(self, flight):
+        """After a restore: the mode's tracker command again (a tracker restarted meanwhile reads it), but no
+        take-off for a mission whose drone has already come down (the touchdown is judged next)."""
+        if not self._resend_tracker_command or flight is Flight.UNKNOWN:
+            return
+        self._resend_tracker_command = False
+        command = TRACKER_COMMAND.get(self.mode)
+        if self.mode is Mode.LANDING and flight is Flight.LANDED and self._airborne_in_mode:
+            command = None
+        if self.mode is Mode.QUIT:
+            command = "hold"
+        if command:
+            self._tracker_commands.append(command)
 
     def _arm(self, t, state):
         """React to a condition that is present in the current mode (it just appeared, or the mode changed)."""

@@ -9,11 +9,22 @@ In:  the condition parameters (/wind_speed, /drone_battery, ... via rospy.get_pa
 Out: supervisor/decisions (JSON per decision), supervisor/mode, supervisor/warning, landing_allowed,
      supervisor/flight_management (JSON {open, auto_takeoff_at}; all latched) and platform_tracking/command
      (the hand-over to the tracker).
-Everything runs in sim time.
+Everything runs in sim time. Garbage on an input (implausible values, stamps from another time, frames of another
+tree, unknown words or states) is dropped with a throttled warning saying what was wrong.
+
+Restarted after a crash (respawn in supervisor.launch), it carries on in the mode it had: its state
+(Supervisor.snapshot) is kept in the private parameter ~recovery on the master, which outlives the
+node, tagged with ~launch_id (unique to each roslaunch, kept across respawns); another launch starts afresh.
 """
 import json
 import sys
 import threading
+import time
+
+import rosgraph
+from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem, first_problem,
+                                      frame_problem, numbers_problem, stamp_problem)
+from platform_tracking.state_machine import State as TrackerState
 
 import rospy
 from landing_msgs.lockstep import LockstepAcker
@@ -25,7 +36,7 @@ from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger, TriggerResponse
 
 from .conditions import MISSING, ConditionTableError, load_table
-from .supervisor import Flight, Settings, SettingsError, Supervisor
+from .supervisor import OPERATOR_COMMANDS, Flight, Settings, SettingsError, Supervisor
 from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer, TouchdownJudge, flight_from_navdata
 
 # The camera's liveness is read from camera_info, which the driver publishes with every frame: the same
@@ -33,6 +44,11 @@ from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer,
 SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/camera_info", "imu_silence_s": "ardrone/imu",
                  "odometry_silence_s": "ardrone/gps/odom", "sonar_silence_s": "ardrone/sonar_height"}
 SERVICES = ("landing", "emergency", "manual", "continue")
+TRACKER_STATES = tuple(state.value for state in TrackerState)
+NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes
+WORLD_FRAME, BODY_FRAME = "world", "ardrone/base_link"  # docs/conventions.md
+DECISIONS_WAIT_S = 3.0  # wall seconds decisions wait at the start for supervisor/decisions' subscribers to connect
+REPEAT_S = 2.0  # the same operator word again within this (sim) time is a repetition, not a new command [s]
 NODE_PARAMS = {  # private parameter: (lowest, highest); besides Settings.SPEC and conditions_file
     "rate_hz": (5.0, 200.0),
     "platform_odom_timeout_s": (0.05, 60.0),
@@ -89,6 +105,12 @@ class SupervisorNode:
         self.lock = threading.Lock()
         self.touchdown = TouchdownJudge(self.params["touchdown_detection_age_s"], self.params["touchdown_max_offset_m"])
         self.core = Supervisor(self.table, settings, log=self._log, touchdown_judge=self.touchdown)
+        self.saved_snapshot = None
+        self.launch_id = rospy.get_param("~launch_id", None)  # one roslaunch's, kept across respawns
+        self.unsent = []  # decisions waiting for the subscribers of supervisor/decisions (_listened_to)
+        self.decisions_wait_until = time.monotonic() + DECISIONS_WAIT_S
+        # Before any subscription: an operator command arriving first would save a fresh state over the old one.
+        self._recover()
         self.watchdog = SensorWatchdog(SENSOR_TOPICS)
         self.platform = PlatformSpeed(self.params["platform_odom_timeout_s"], self.params["platform_speed_window_s"])
         self.target = TargetLostTimer(lost_state)
@@ -96,6 +118,8 @@ class SupervisorNode:
         self.published = {"mode": None, "warning": None, "landing_allowed": None, "flight_management": None}
         self.last_warning_sent = -1e9
         self.lockstep = LockstepAcker(period=1.0 / self.params["rate_hz"])
+        self.rejections = RosRejectionLog()
+        self.last_command = (None, 0.0)  # (word, sim time) of the latest operator command taken
 
         self.pub_decisions = rospy.Publisher("supervisor/decisions", String, queue_size=100)
         self.pub_mode = rospy.Publisher("supervisor/mode", String, queue_size=1, latch=True)
@@ -128,6 +152,61 @@ class SupervisorNode:
                       settings.answer_timeout_s, settings.idle_takeoff_s, settings.recheck_interval_s,
                       settings.recheck_count)
 
+    def _recover(self):
+        """Carry on from the state a crashed predecessor of this launch left in ~recovery, if any."""
+        try:
+            saved, launch_id = rospy.get_param("~recovery", None), self.launch_id
+            saved = json.loads(saved) if saved else None
+        except (KeyError, ValueError, TypeError) as err:
+            rospy.logwarn("supervisor: unreadable ~recovery (%s): starting afresh", err)
+            return
+        if not saved or launch_id is None or saved.get("launch_id") != launch_id or \
+                not isinstance(saved.get("snapshot"), dict):
+            return
+        try:
+            with self.lock:
+                self.core.restore(rospy.get_time(), saved["snapshot"])
+        except (KeyError, ValueError, TypeError) as err:
+            rospy.logwarn("supervisor: cannot carry on from ~recovery (%s): starting afresh", err)
+            return
+        self.saved_snapshot = saved["snapshot"]
+        rospy.logwarn("supervisor: restarted after a crash; carrying on in mode %s", self.core.mode.value)
+
+    def _save(self):
+        """Keep the core's state where a restarted supervisor finds it (only when it changed)."""
+        snapshot = self.core.snapshot()
+        if snapshot == self.saved_snapshot:
+            return
+        try:
+            rospy.set_param("~recovery", json.dumps({"launch_id": self.launch_id, "snapshot": snapshot}))
+            self.saved_snapshot = snapshot
+        except Exception as err:  # the master is gone: the flight goes on, a restart would start afresh
+            rospy.logwarn_throttle(30.0, "supervisor: cannot save its state for a restart: %s" % err)
+
+    def _listened_to(self):
+        """Whether supervisor/decisions (not latched) reaches its subscribers. Right after a restart they are still
+        connecting, and the decision that says the supervisor carried on would be lost: decisions wait until every
+        subscriber the master lists is connected, for at most DECISIONS_WAIT_S of wall time after the start."""
+        if self.decisions_wait_until is None:
+            return True
+        if time.monotonic() < self.decisions_wait_until:
+            try:
+                subscribers = dict(rosgraph.Master(rospy.get_name()).getSystemState()[1])
+                if self.pub_decisions.get_num_connections() < len(subscribers.get(self.pub_decisions.resolved_name, [])):
+                    return False
+            except Exception:  # the master is gone: nothing more will connect
+                pass
+        self.decisions_wait_until = None
+        return True
+
+    def _dropped(self, topic, problem):
+        return self.rejections.reject(topic, problem)
+
+    @staticmethod
+    def _header_problem(msg, frame):
+        return first_problem(stamp_problem(msg.header.stamp.to_sec(), rospy.get_time()),
+                             frame_problem(msg.header.frame_id, frame))
+
     @staticmethod
     def _log(level, text):
         {"info": rospy.loginfo, "warn": rospy.logwarn, "error": rospy.logerr}[level](text)
@@ -140,27 +219,53 @@ class SupervisorNode:
 
     def _on_platform_odom(self, msg):
         v = msg.twist.twist.linear
+        problem = numbers_problem(MAX_SPEED_MPS, velocity=(v.x, v.y)) or self._header_problem(msg, WORLD_FRAME)
+        if problem:
+            return self._dropped("kalman_platform_odom", problem)
         with self.lock:
             self.platform.on_filtered(rospy.get_time(), v.x, v.y)
 
     def _on_vehicle_gps(self, msg):
         v = msg.twist.twist.linear
+        problem = numbers_problem(MAX_SPEED_MPS, velocity=(v.x, v.y)) or self._header_problem(msg, WORLD_FRAME)
+        if problem:
+            return self._dropped("summit_xl/gps/odom", problem)
         with self.lock:
             self.platform.on_gps(rospy.get_time(), v.x, v.y)
 
     def _on_tracker_state(self, msg):
+        problem = choice_problem(msg.data, TRACKER_STATES, "tracker state")
+        if problem:
+            return self._dropped("platform_tracking/state", problem)
         with self.lock:
             self.target.on_state(rospy.get_time(), msg.data)
             self.touchdown.on_tracker_state(msg.data)
 
     def _on_detection(self, msg):
+        p = msg.point
+        problem = numbers_problem(MAX_ALTITUDE_M, point=(p.x, p.y, p.z)) or self._header_problem(msg, BODY_FRAME)
+        if problem:
+            return self._dropped("platform/current_platform_position_in_ardrone", problem)
         with self.lock:
             self.touchdown.on_detection(msg.header.stamp.to_sec(), msg.point.x, msg.point.y)
 
     def _on_navdata(self, msg):
+        problem = choice_problem(msg.state, NAVDATA_STATES, "state") or \
+            stamp_problem(msg.header.stamp.to_sec(), rospy.get_time())
+        if problem:
+            return self._dropped("ardrone/navdata", problem)
         self.navdata = (rospy.get_time(), msg.state)
 
     def _on_operator(self, msg):
+        # An unknown word is garbage on the topic (a decision is for commands an operator gave), and so is a word
+        # repeated within REPEAT_S (a publisher stuck in a loop): one decision for it is enough.
+        word, now = msg.data.strip().lower(), rospy.get_time()
+        problem = choice_problem(word, OPERATOR_COMMANDS, "command")
+        if not problem and self.last_command[0] == word and 0.0 <= now - self.last_command[1] < REPEAT_S:
+            problem = ("repeated", "%r again %.2f s after the last one" % (word, now - self.last_command[1]))
+        if problem:
+            return self._dropped("operator/command", problem)
+        self.last_command = (word, now)
         self._command(msg.data)
 
     def _service(self, name):
@@ -173,6 +278,7 @@ class SupervisorNode:
         with self.lock:
             accepted, message = self.core.command(rospy.get_time(), word)
             self._publish()
+            self._save()
         return accepted, message
 
     @staticmethod
@@ -203,8 +309,11 @@ class SupervisorNode:
     # ----- outputs -----------------------------------------------------------------------------------
     def _publish(self, t=None):
         decisions, tracker_commands = self.core.take_outputs()
-        for decision in decisions:
-            self.pub_decisions.publish(String(data=json.dumps(decision.as_dict())))
+        self.unsent += decisions
+        if self.unsent and self._listened_to():
+            for decision in self.unsent:
+                self.pub_decisions.publish(String(data=json.dumps(decision.as_dict())))
+            self.unsent = []
         for command in tracker_commands:
             self.pub_tracker.publish(String(data=command))
         mode = self.core.mode.value
@@ -232,6 +341,7 @@ class SupervisorNode:
         with self.lock:
             self.core.tick(t, self._readings(t), self._flight(t))
             self._publish(t)
+            self._save()
         self.lockstep.ack(now)
 
     def spin(self):

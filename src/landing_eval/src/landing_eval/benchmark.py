@@ -14,6 +14,7 @@ import sys
 import time
 
 from . import run_pool
+from .runner import wall_limits
 from . import scenario as scenario_mod
 from .results_store import CSV_FIELDS, ResultsFile, ResultsFileError  # noqa: F401 (CSV_FIELDS: the columns)
 
@@ -61,6 +62,16 @@ def check_expectations(expect, result):
         elif math.hypot(position[0] - truth[0], position[1] - truth[1]) > expect["emergency_position_within_m"]:
             problems.append("emergency position %.2f m from the landing point" % math.hypot(
                 position[0] - truth[0], position[1] - truth[1]))
+    needed = expect.get("min_missions_on_pad")
+    if needed is not None and (result.get("missions_on_pad") or 0) < needed:
+        problems.append("%s of %d missions on the pad, expected at least %d" % (
+            result.get("missions_on_pad") or 0, len(result.get("missions") or []), needed))
+    if expect.get("no_node_deaths"):
+        killed = {fault.get("name") for fault in result.get("faults") or []}
+        deaths = [d for d in result.get("node_deaths") or [] if d.get("node") not in killed]
+        if deaths:
+            problems.append("node(s) died: %s" % ", ".join("%s (exit code %s)" % (d["node"], d["exit_code"])
+                                                          for d in deaths))
     return not problems, "; ".join(problems)
 
 
@@ -90,7 +101,7 @@ def plan(files, repeat, out_root):
             specs.append({"python": sys.executable, "file": os.path.abspath(path), "scenario_text": text,
                           "out_dir": os.path.abspath(os.path.join(out_root, label)),
                           "log": os.path.abspath(os.path.join(out_root, label + ".log")),
-                          "wall_timeout": max(300.0, 4.0 * s["time_limit_s"]),
+                          "wall_timeout": wall_limits(s["time_limit_s"])["flight"],
                           "row": dict(row, run=run), "expect": s["expect"]})
     return specs, bad
 
@@ -106,7 +117,8 @@ def row_of(spec, outcome):
     row.update({k: result.get(k) for k in ("outcome", "touchdown_error_m", "time_to_land_s", "sim_time_s",
                                            "wall_time_s", "real_time_factor", "emergency_position")})
     row["decisions"] = len(result.get("decisions") or [])
-    row["passed"] = passed and not result.get("error")
+    # An aborted run carries its reason as the error: it passes only where the scenario expects it to abort.
+    row["passed"] = passed and (not result.get("error") or result.get("outcome") == "aborted")
     row["error"] = result.get("error") or why
     return row
 

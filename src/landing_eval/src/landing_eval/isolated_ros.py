@@ -107,6 +107,24 @@ def reconnect_subscribers(master, missing, timeout=2.0):
     return sent
 
 
+LOOPBACK_SHIM = "liblanding_loopback_bind.so"
+
+
+def loopback_environment(env):
+    """``env`` for a graph that listens on loopback only: ROS_IP=127.0.0.1 (the master, rospy, roscpp's TCPROS) and
+    the preloaded shim that keeps roscpp's XML-RPC server there too (landing_msgs/src/loopback_bind.c), found on
+    LD_LIBRARY_PATH (the built workspace's devel/lib)."""
+    env = dict(env, ROS_IP="127.0.0.1", LANDING_ROS_LOOPBACK="1")
+    env.pop("ROS_HOSTNAME", None)
+    for directory in env.get("LD_LIBRARY_PATH", "").split(":"):
+        shim = os.path.join(directory, LOOPBACK_SHIM)
+        if directory and os.path.isfile(shim):
+            preload = [p for p in env.get("LD_PRELOAD", "").split(":") if p and os.path.basename(p) != LOOPBACK_SHIM]
+            env["LD_PRELOAD"] = ":".join([shim] + preload)
+            break
+    return env
+
+
 class IsolatedProcess:
     """``command`` run against the master at ``master_uri``, in a new process group, its output in
     ``log_path``. Use as a context manager (from the thread that lives as long as the process should: it
@@ -118,8 +136,7 @@ class IsolatedProcess:
         self.process, self.interrupted = None, False
 
     def __enter__(self):
-        env = dict(os.environ, ROS_MASTER_URI=self.master_uri, ROS_HOSTNAME="127.0.0.1")
-        env.pop("ROS_IP", None)
+        env = loopback_environment(dict(os.environ, ROS_MASTER_URI=self.master_uri))
         self._log = open(self.log_path, "w")
         self.process = subprocess.Popen(self.command, env=env, stdout=self._log, stderr=subprocess.STDOUT,
                                         stdin=subprocess.DEVNULL, start_new_session=True,
@@ -150,7 +167,8 @@ class IsolatedProcess:
 class IsolatedLaunch(IsolatedProcess):
     """``roslaunch -p PORT`` of ``launch_args`` (package, file, arg:=value...) under its own master on a
     free port, so several runs can coexist. ``master_uri`` is what clients in this process must use (set
-    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``)."""
+    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``). With a master already running on ``port``
+    (IsolatedCore) roslaunch uses it rather than starting one of its own."""
 
     def __init__(self, launch_args, log_path, port=None):
         self.port = port or free_port()
@@ -173,3 +191,13 @@ class IsolatedLaunch(IsolatedProcess):
             except Exception:  # master not up yet
                 time.sleep(0.05)
         raise TimeoutError("no ROS master on port %d after %.0f s; see %s" % (self.port, timeout, self.log_path))
+
+
+class IsolatedCore(IsolatedLaunch):
+    """``roscore -p PORT`` on a free port: the master (and rosout) in a process tree of its own. A launch run
+    against it (IsolatedLaunch with the same port) then does not own the master: roslaunch ends its whole graph
+    when a master it started dies, whereas nodes whose master dies go on over their connections."""
+
+    def __init__(self, log_path, port=None):
+        super().__init__([], log_path, port)
+        self.command = ["roscore", "-p", str(self.port)]

@@ -15,6 +15,7 @@ import threading
 import time
 
 from .isolated_ros import signal_on_parent_death
+from .runner import SHUT_DOWN_WALL_S, START_UP_WALL_S
 
 # Environment a run needs from the machine that starts the sweep: the venv and the built workspace (the
 # same paths on every node). ROS_MASTER_URI, ROS_IP and ROS_HOSTNAME are not among them: each run has
@@ -23,7 +24,9 @@ FORWARDED_ENV = ("PATH", "PYTHONPATH", "LD_LIBRARY_PATH", "CMAKE_PREFIX_PATH", "
                  "ROS_ROOT", "ROS_ETC_DIR", "ROS_DISTRO", "ROS_VERSION", "ROS_PYTHON_VERSION",
                  "ROSLISP_PACKAGE_DIRECTORIES", "MUJOCO_GL", "LP_NUM_THREADS")
 STOP_GRACE_S = 30.0     # a run given SIGINT or SIGTERM has this long to stop its graph before SIGKILL [s]
-START_STOP_MARGIN_S = 120.0  # wall time a run may take beyond its flight's wall limit (start-up, shut-down) [s]
+# Wall time a run may take beyond its flight's wall limit: its own start-up and shut-down budgets (it ends by
+# itself within them, runner.wall_limits) and STOP_GRACE_S more before it is stopped from here.
+START_STOP_MARGIN_S = START_UP_WALL_S + SHUT_DOWN_WALL_S + STOP_GRACE_S
 RAY_MAX_RETRIES = 3     # a task whose worker or node died is run again, elsewhere if need be, this often
 
 
@@ -117,16 +120,23 @@ def execute_run(spec):
                 process.wait()
             outcome["failure"] = "run_scenario did not finish within %.0f s" % (
                 spec["wall_timeout"] + START_STOP_MARGIN_S)
-            return outcome
         finally:
             with _Running.lock:
                 _Running.processes.discard(process)
+    # run_scenario writes result.json whatever happened to the run (an aborted one says why); without it the run
+    # failed before its scenario was read, or was killed.
     result_file = os.path.join(out_dir, "result.json")
-    if outcome["returncode"] != 0 or not os.path.isfile(result_file):
-        outcome["failure"] = "run_scenario exited with %s; see %s" % (outcome["returncode"], spec["log"])
-        return outcome
-    with open(result_file) as stream:
-        outcome["result"] = json.load(stream)
+    if os.path.isfile(result_file):
+        try:
+            with open(result_file) as stream:
+                outcome["result"] = json.load(stream)
+        except ValueError as err:
+            outcome["failure"] = "unreadable %s: %s" % (result_file, err)
+    elif outcome["failure"] is None:
+        outcome["failure"] = "run_scenario exited with %s without a result; see %s" % (outcome["returncode"],
+                                                                                       spec["log"])
+    if outcome["result"] is not None and outcome["failure"]:
+        outcome["result"]["error"] = "; ".join(filter(None, [outcome["result"].get("error"), outcome["failure"]]))
     return outcome
 
 

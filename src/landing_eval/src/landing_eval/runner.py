@@ -1,9 +1,15 @@
 """run_scenario: one scenario, headless, under its own ROS master; writes result.json and the bag.
 
 The flight is scored with the simulator's ground truth (touchdown classification and the resting
-distance from the pad); nothing here feeds ground truth back into the flying system."""
+distance from the pad); nothing here feeds ground truth back into the flying system.
+
+A run always ends, within wall_limits(time limit)["total"], and always leaves a result.json (written
+atomically): the outcome of every mission, or `aborted` with the reason when the graph fell apart (the
+launch ended, the simulation clock stopped) or never came up. A bag whose recorder was killed is reindexed."""
 import argparse
 import collections
+import contextlib
+import faulthandler
 import json
 import os
 import signal
@@ -12,13 +18,33 @@ import sys
 import threading
 import time
 
-from .isolated_ros import IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
+from .isolated_ros import IsolatedCore, IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
 
+from . import faults
+from . import missions as missions_mod
+from . import processes
 from . import scenario as scenario_mod
 from . import scoring
 
 SETTLE_AFTER_TOUCHDOWN_S = 1.0  # sim seconds the drone must rest before the outcome is read
 EMERGENCY_REPORT_WAIT_S = 4.0   # sim seconds to wait for emergency/position after an emergency touchdown
+START_UP_WALL_S = 240.0         # master, graph, recorder, connections and the first clock tick, at most [s]
+SHUT_DOWN_WALL_S = 60.0         # stopping the recorder and the launch (20 s each before SIGKILL), reindexing [s]
+CLOCK_STALL_WALL_S = 30.0       # the sim clock standing still this long after the start: the simulator is gone [s]
+MODE_WAIT_S = 30.0              # sim seconds a next mission waits for the supervisor to be back on the ground
+RECORDER = "flight_recorder"
+
+
+def wall_limits(time_limit_s, flight_wall_s=None):
+    """Wall-clock budget of a run [s]: its flight (``flight_wall_s``, default 4 x the sim time limit, at least
+    300 s), start-up and shut-down; ``total`` bounds the whole run_scenario process."""
+    flight = flight_wall_s or max(300.0, 4.0 * time_limit_s)
+    return {"start_up": START_UP_WALL_S, "flight": flight, "shut_down": SHUT_DOWN_WALL_S,
+            "total": START_UP_WALL_S + flight + SHUT_DOWN_WALL_S}
+
+
+class GraphFailure(RuntimeError):
+    """The graph fell apart during the flight (the launch ended, the clock stopped): the run is aborted."""
 
 
 def launch_arguments(s):
@@ -44,14 +70,22 @@ def launch_arguments(s):
 
 
 def recorder_command(bag):
-    """rosbag record of the topics interface/record.launch records (its record_regex), started directly:
-    through a second roslaunch it took 0.4 s longer to start and to stop."""
+    """rosbag record of the topics interface/record.launch records (its record_regex, in its chunk_kb chunks),
+    started directly: through a second roslaunch it took 0.4 s longer to start and to stop."""
     import xml.etree.ElementTree as ElementTree
     import rospkg
     launch = os.path.join(rospkg.RosPack().get_path("interface"), "launch", "record.launch")
-    regex = next(arg.get("default") for arg in ElementTree.parse(launch).getroot().iter("arg")
-                 if arg.get("name") == "record_regex")
-    return ["rosrun", "rosbag", "record", "--output-name=" + bag, "--lz4", "-e", regex, "__name:=flight_recorder"]
+    defaults = {arg.get("name"): arg.get("default") for arg in ElementTree.parse(launch).getroot().iter("arg")}
+    return ["rosrun", "rosbag", "record", "--output-name=" + bag, "--lz4", "--chunksize=" + defaults["chunk_kb"],
+            "-e", defaults["record_regex"], "__name:=" + RECORDER]
+
+
+def only_from(node, callback):
+    """A subscriber callback that hears only ``node`` (by the connection's caller id)."""
+    def heard(msg):
+        if (getattr(msg, "_connection_header", None) or {}).get("callerid") == node:
+            callback(msg)
+    return heard
 
 
 class EventSchedule:
@@ -67,15 +101,35 @@ class EventSchedule:
         return fired
 
 
+class Recorders:
+    """The flight recorder (rosbag record) and, after it died, its successors (flight.2.bag, ...)."""
+
+    def __init__(self, out_dir, master_uri, stack):
+        self.out_dir, self.master_uri, self.stack = out_dir, master_uri, stack
+        self.bags, self.current = [], None
+
+    def start(self):
+        index = len(self.bags) + 1
+        bag = os.path.abspath(os.path.join(self.out_dir, "flight.bag" if index == 1 else "flight.%d.bag" % index))
+        log = os.path.join(self.out_dir, "recorder.log" if index == 1 else "recorder.%d.log" % index)
+        self.current = self.stack.enter_context(IsolatedProcess(recorder_command(bag), log, self.master_uri))
+        self.bags.append(bag)
+        return self.current
+
+    def pids(self):
+        return [self.current.process.pid] if self.current is not None and self.current.process else []
+
+
 class FlightMonitor:
     """Watches a run from inside the graph and decides when it is over (ROS-bound part of the runner)."""
 
-    def __init__(self, s, wall_timeout):
+    def __init__(self, s, ros, recorders, core):
         import rosgraph
         import rospy
+        from geometry_msgs.msg import PoseStamped
         from landing_msgs.msg import PositionXYCommand, Touchdown
         from std_msgs.msg import String
-        self.rospy, self.s = rospy, s
+        self.rospy, self.s, self.ros, self.recorders, self.core = rospy, s, ros, recorders, core
         # rospy picks its clock at init_node: set /use_sim_time here rather than race roslaunch setting it,
         # or the runner may count wall time and end the flight at once.
         rosgraph.Master("/scenario_runner").setParam("/use_sim_time", True)
@@ -85,17 +139,38 @@ class FlightMonitor:
         # samples of one instant may be compared (the pad moves up to 25 m/s).
         self.drone_poses, self.pad_poses = collections.OrderedDict(), collections.OrderedDict()
         self.poses_lock = threading.Lock()  # the two subscriber threads write, resting_pad_error reads
-        self.tracker_state, self.emergency_position = None, None
+        self.tracker_state, self.emergency_position, self.supervisor_mode = None, None, None
         self.decisions, self.emergency_ordered, self.landing_start = [], False, None
-        rospy.Subscriber("ardrone/touchdown", Touchdown, self._on_touchdown)
-        rospy.Subscriber("platform_tracking/state", String, lambda m: setattr(self, "tracker_state", m.data))
-        rospy.Subscriber("emergency/position", PositionXYCommand,
-                         lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)]))
-        rospy.Subscriber("supervisor/decisions", String, self._on_decision)
+        self.missions = missions_mod.MissionLog()
+        self.resources = processes.ResourceLog()
+        self.warnings = []  # (wall s, node, text) of WARN and worse on /rosout_agg, when the scenario fuzzes
+        self.master_lost_at = None
+        self.recorder_deaths = []
+        self._recorder_restart = None  # (new recorder, sim time) until it has subscribed again
+        self.faults = faults.FaultInjector(rospy, self.process_roots)
+        # Each topic is read from the node that owns it only: a scenario may publish garbage on it (fuzz:).
+        sim, sub = "/mujoco_sim", rospy.Subscriber
+        sub("ardrone/touchdown", Touchdown, only_from(sim, self._on_touchdown))
+        # Ground truth from the start (not once the drone is down): a subscription made later would need the master,
+        # which may be dead by then (kill_node master), and rospy then waits for it for ever.
+        sub("groundtruth/ardrone", PoseStamped, only_from(sim, lambda m: self._remember(self.drone_poses, m)))
+        sub("groundtruth/landing_pad", PoseStamped, only_from(sim, lambda m: self._remember(self.pad_poses, m)))
+        sub("platform_tracking/state", String,
+            only_from("/platform_tracking", lambda m: setattr(self, "tracker_state", m.data)))
+        sub("supervisor/mode", String, only_from("/supervisor", lambda m: setattr(self, "supervisor_mode", m.data)))
+        sub("emergency/position", PositionXYCommand, only_from(
+            "/emergency", lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)])))
+        sub("supervisor/decisions", String, only_from("/supervisor", self._on_decision))
+        if s.get("fuzz"):
+            from rosgraph_msgs.msg import Log
+            rospy.Subscriber("rosout_agg", Log, self._on_log, queue_size=1000)
         self.operator = rospy.Publisher("operator/command", String, queue_size=10, latch=True)
         self.tracker_command = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
         self.fault = rospy.Publisher("mujoco_sim/fault", String, queue_size=10)
-        self.wall_deadline = time.monotonic() + wall_timeout
+
+    def process_roots(self):
+        """Pids whose process trees hold this run's nodes: the master's, the launch and the flight recorder."""
+        return [self.core.process.pid, self.ros.process.pid] + self.recorders.pids()
 
     def _remember(self, poses, msg, keep=100):
         with self.poses_lock:
@@ -104,11 +179,6 @@ class FlightMonitor:
                 poses.popitem(last=False)
 
     def _on_touchdown(self, msg):
-        if self.touchdown is None:
-            # Ground truth is only read once the drone is down: two 50 Hz streams fewer during the flight.
-            from geometry_msgs.msg import PoseStamped
-            self.rospy.Subscriber("groundtruth/ardrone", PoseStamped, lambda m: self._remember(self.drone_poses, m))
-            self.rospy.Subscriber("groundtruth/landing_pad", PoseStamped, lambda m: self._remember(self.pad_poses, m))
         if self.touchdown is None or msg.header.stamp.to_sec() > self.touchdown.header.stamp.to_sec():
             self.touchdown = msg
 
@@ -120,6 +190,11 @@ class FlightMonitor:
         self.decisions.append(decision)
         if decision.get("action") == "emergency_landing":
             self.emergency_ordered = True
+            self.missions.emergency()
+
+    def _on_log(self, msg):
+        if msg.level >= msg.WARN:  # (sim time: the nodes throttle their warnings on their clock)
+            self.warnings.append((round(msg.header.stamp.to_sec(), 3), msg.name, msg.msg))
 
     def _needed_topics(self):
         """Topics the analysis of the bag cannot do without."""
@@ -136,11 +211,14 @@ class FlightMonitor:
 
     def _wait(self, condition, what, deadline):
         while not condition():
+            if not self.ros.alive():
+                raise RuntimeError("%s: roslaunch exited with code %s (%s)" % (
+                    what, self.ros.process.returncode, launch_failure(self.ros.log_path)))
             if time.monotonic() > deadline:
                 raise TimeoutError("%s within the time allowed (tracker state %r)" % (what, self.tracker_state))
             time.sleep(0.02)
 
-    def wait_for_graph(self, timeout=120.0):
+    def wait_for_graph(self, deadline):
         """Until every needed topic is advertised and the landing stack (if any) reports its state."""
         import rosgraph
         master = rosgraph.Master("/scenario_runner")
@@ -149,9 +227,9 @@ class FlightMonitor:
             advertised = {topic for topic, _ in master.getSystemState()[0]}
             return all(t in advertised for t in self._needed_topics() + self._outputs_of_every_node()) and \
                 (not self.s.get("_needs_tracker") or self.tracker_state is not None)
-        self._wait(ready, "the graph did not come up", time.monotonic() + timeout)
+        self._wait(ready, "the graph did not come up", deadline)
 
-    def wait_for_recorder(self, recorder, timeout=60.0):
+    def wait_for_recorder(self, recorder, deadline):
         """Until rosbag record (the IsolatedProcess ``recorder``) subscribes to every needed topic. It
         discovers topics on start-up and then on a sim-time timer, which does not run while the physics is
         held: hence it is started after the graph is up (wait_for_graph)."""
@@ -163,10 +241,10 @@ class FlightMonitor:
                 raise RuntimeError("rosbag record exited with code %s; see %s" % (
                     recorder.process.returncode, recorder.log_path))
             subscribers = {topic: nodes for topic, nodes in master.getSystemState()[1]}
-            return all("/flight_recorder" in subscribers.get(t, []) for t in self._needed_topics())
-        self._wait(ready, "the flight recorder did not subscribe", time.monotonic() + timeout)
+            return all("/" + RECORDER in subscribers.get(t, []) for t in self._needed_topics())
+        self._wait(ready, "the flight recorder did not subscribe", deadline)
 
-    def wait_for_connections(self, timeout=120.0, retry_after=3.0):
+    def wait_for_connections(self, deadline, retry_after=3.0):
         """Until every subscription in the graph is connected to its publishers. The simulator's
         lock-step only waits for nodes that have acknowledged once: a node whose inputs were still
         connecting at the start fell seconds behind (the supervisor then saw 'odometry missing' for 5 s
@@ -187,63 +265,196 @@ class FlightMonitor:
                 since.update((m, now) for m in stuck)
             return not missing
         try:
-            self._wait(connected, "the graph did not connect", time.monotonic() + timeout)
+            self._wait(connected, "the graph did not connect", deadline)
         except TimeoutError as err:
             raise TimeoutError("%s; %d subscriptions never connected, e.g. %s" % (
                 err, len(missing), ", ".join("%s from %s to %s" % m for m in missing[:3])))
 
-    def release(self, timeout=120.0):
+    def release(self, deadline):
         """Start the simulator's physics and wait for the clock to run."""
         from std_msgs.msg import Empty
-        deadline = time.monotonic() + timeout
         start = self.rospy.Publisher("mujoco_sim/start", Empty, queue_size=1, latch=True)
         start.publish(Empty())
-        while self.rospy.get_time() <= 0.0:
-            if time.monotonic() > deadline:
-                raise TimeoutError("the simulator did not start within %.0f s" % timeout)
-            time.sleep(0.02)
+        self._wait(lambda: self.rospy.get_time() > 0.0, "the simulator did not start", deadline)
+
+    def sample_resources(self, label, wall_start):
+        return self.resources.sample(label, time.monotonic() - wall_start, self.rospy.get_time(),
+                                     processes.nodes_below(self.process_roots()))
+
+    # ----- events ----------------------------------------------------------------------------------
+    def _operator(self, action):
+        from std_msgs.msg import String
+        self.operator.publish(String(data=action))
+        if action in ("landing", "takeoff") and not self.s.get("_supervisor"):
+            # Without the supervisor in the graph, the landing mode is the tracker's own take-off.
+            self.tracker_command.publish(String(data="takeoff"))
+
+    def _set_param(self, name, value):
+        try:
+            self.rospy.set_param("/" + name, value)
+        except Exception as err:  # the master is gone: nothing can be set any more
+            self.rospy.logwarn("could not set /%s = %r: %s", name, value, err)
 
     def apply(self, event):
         from std_msgs.msg import String
         rospy = self.rospy
-        rospy.loginfo("scenario event at t=%.2f: %s", rospy.get_time(), event)
+        t = rospy.get_time()
+        rospy.loginfo("scenario event at t=%.2f: %s", t, event)
         if "operator" in event:
             action = event["operator"]
-            self.operator.publish(String(data=action))
+            self._operator(action)
             if action in ("landing", "takeoff"):
-                self.landing_start = self.landing_start or rospy.get_time()
-                if not self.s.get("_supervisor"):
-                    # Without the supervisor in the graph, the landing mode is the tracker's own take-off.
-                    self.tracker_command.publish(String(data="takeoff"))
+                self.landing_start = self.landing_start or t
+                if self.missions.current is None and not self.missions.records:
+                    self.missions.start(self.landing_start)
             if action == "emergency":
                 self.emergency_ordered = True
+                self.missions.emergency()
         elif "set_param" in event:
-            rospy.set_param("/" + event["set_param"], event["value"])
+            self._set_param(event["set_param"], event["value"])
         elif event["fault"] == "kill_node":
-            name = event["name"] if event["name"].startswith("/") else "/" + event["name"]
-            result = subprocess.run(["rosnode", "kill", name], capture_output=True, text=True, timeout=30)
-            rospy.loginfo("killed %s: %s", name, (result.stdout + result.stderr).strip())
+            self.faults.kill(event["name"], event["signal"], t)
         else:
             self.fault.publish(String(data=json.dumps({"fault": event["fault"], "duration_s": event["duration_s"]})))
 
-    def run(self, schedule, time_limit):
+    # ----- the flight ------------------------------------------------------------------------------
+    def _settled(self, since):
+        """The latest touchdown after sim time ``since``, once the drone has rested on it (or crashed)."""
+        touchdown = self.touchdown
+        if touchdown is None or touchdown.header.stamp.to_sec() <= since:
+            return None
+        touchdown_time = touchdown.header.stamp.to_sec()
+        # After an emergency landing, wait for the coordinates the emergency module reports.
+        ordered = self.missions.current["emergency_ordered"] if self.missions.current else self.emergency_ordered
+        settle = EMERGENCY_REPORT_WAIT_S if ordered and self.emergency_position is None else SETTLE_AFTER_TOUCHDOWN_S
+        if touchdown.crashed or self._latest_common_pose_time() >= touchdown_time + settle:
+            return touchdown
+        return None
+
+    def _check_graph(self, clock):
+        """Raises GraphFailure when the launch ended or the clock stopped; notes a lost master."""
+        if not self.ros.alive():
+            raise GraphFailure("roslaunch ended with code %s at t=%.2f s: %s" % (
+                self.ros.process.returncode, self.rospy.get_time(), launch_failure(self.ros.log_path)))
+        t, now = self.rospy.get_time(), time.monotonic()
+        if t > clock["t"]:
+            clock.update(t=t, wall=now)
+        elif now - clock["wall"] > CLOCK_STALL_WALL_S:
+            raise GraphFailure("the simulation clock has stood at t=%.2f s for %.0f s (wall): the simulator "
+                               "stopped" % (t, now - clock["wall"]))
+        if self.master_lost_at is None and now - clock.get("master_checked", 0.0) > 2.0:
+            clock["master_checked"] = now
+            if "master" not in processes.nodes_below([self.core.process.pid]):
+                self.master_lost_at = round(t, 3)
+                self.rospy.logwarn("the ROS master is gone (t=%.2f s): the graph flies on over its existing "
+                                   "connections; nothing new can connect", t)
+        current = self.recorders.current
+        if current is not None and not current.alive() and not current.interrupted:
+            self._recorder_died(t)
+
+    def _recorder_died(self, t):
+        died = self.recorders.current
+        self.recorder_deaths.append({"at_s": round(t, 3), "exit_code": died.process.returncode,
+                                     "bag": self.recorders.bags[-1]})
+        if self.master_lost_at is not None:
+            self.rospy.logwarn("the flight recorder died at t=%.2f s; with the master gone it cannot be restarted", t)
+            self.recorders.current = None
+            return
+        import rosgraph
+        try:  # the dead recorder is still registered (a SIGKILL unregisters nothing): its URI tells it apart
+            old_uri = rosgraph.Master("/scenario_runner").lookupNode("/" + RECORDER)
+        except Exception:
+            old_uri = None
+        self.recorders.start()
+        self.rospy.logwarn("the flight recorder died at t=%.2f s (code %s): recording on into %s", t,
+                           died.process.returncode, self.recorders.bags[-1])
+        self._recorder_restart = (old_uri, t)
+
+    def _check_recorder_restart(self):
+        pending = self._recorder_restart
+        if pending is None:
+            return
+        import rosgraph
+        old_uri, _ = pending
+        master = rosgraph.Master("/scenario_runner")
+        try:
+            registered = master.lookupNode("/" + RECORDER) != old_uri
+            subscribers = {topic: nodes for topic, nodes in master.getSystemState()[1]}
+        except Exception:  # not registered yet, or the master is busy
+            return
+        if registered and all("/" + RECORDER in subscribers.get(t, []) for t in self._needed_topics()):
+            self._recorder_restart = None
+            self.faults.mark_recovered(RECORDER, self.rospy.get_time(), "subscribed to every needed topic")
+
+    def _next_mission(self, plan, t):
+        """Before the next mission: the operator acknowledges an emergency report, then once the supervisor is
+        back on the ground sets the new conditions (and a fresh battery) and chooses the landing mode again.
+        Returns True once the mission started."""
+        if self.s.get("_supervisor"):
+            if self.supervisor_mode == "emergency":
+                self._operator("ack")
+                return False
+            waited = t - self._pause_end
+            if self.supervisor_mode not in ("landed", "idle") and waited < MODE_WAIT_S:
+                return False
+        try:
+            battery = self.rospy.get_param("/drone_battery")
+        except Exception:  # unreadable or the master gone: swap
+            battery = None
+        index = len(self.missions.records) + 1
+        params, swapped = missions_mod.next_mission_settings(plan, index, battery)
+        for name, value in params.items():
+            self._set_param(name, value)
+        self.rospy.loginfo("mission %d at t=%.2f s: %s", index, t, params or "same conditions")
+        self.emergency_position = None
+        self.missions.start(t, params, swapped)
+        self._operator("landing")
+        return True
+
+    def run(self, schedule, time_limit, wall_deadline, wall_start):
+        """The flight until its last mission ended, the time limit, or the wall deadline (TimeoutError); raises
+        GraphFailure when the graph fell apart."""
         rospy = self.rospy
+        sim_start = rospy.get_time()
+        plan = self.s.get("missions")
+        clock = {"t": rospy.get_time(), "wall": time.monotonic()}
+        self.faults.prepare([e["name"] for e in schedule.pending if e.get("fault") == "kill_node"])
+        self._pause_end = None  # sim time the next mission may start
         while True:
             t = rospy.get_time()
             for event in schedule.due(t):
                 self.apply(event)
-            if self.touchdown is not None:
-                touchdown_time = self.touchdown.header.stamp.to_sec()
-                # After an emergency landing, wait for the coordinates the emergency module reports.
-                settle = EMERGENCY_REPORT_WAIT_S if self.emergency_ordered and self.emergency_position is None \
-                    else SETTLE_AFTER_TOUCHDOWN_S
-                if self.touchdown.crashed or self._latest_common_pose_time() >= touchdown_time + settle:
-                    return
+            self._check_graph(clock)
+            self._check_recorder_restart()
+            if self._pause_end is None:
+                since = self.missions.current["start_s"] if self.missions.current else float("-inf")
+                touchdown = self._settled(since)
+                if touchdown is not None:
+                    if self.missions.current is None:  # nobody chose the landing mode: it started by itself
+                        self.missions.start(self.landing_start or sim_start)
+                    record = self.missions.finish(touchdown, self.resting_pad_error(), self._landed_decision(since))
+                    rospy.loginfo("mission %d: %s", record["mission"], record["outcome"])
+                    self.sample_resources("mission %d" % record["mission"], wall_start)
+                    if not plan or len(self.missions.records) >= plan["count"] or touchdown.crashed:
+                        return
+                    self._pause_end = t + plan["pause_s"]
+            elif t >= self._pause_end and self._next_mission(plan, t):
+                self._pause_end = None
             if t >= time_limit:
+                if self.missions.current is None and not self.missions.records:
+                    self.missions.start(self.landing_start or sim_start)
+                self.missions.abandon("timeout")
                 return
-            if time.monotonic() > self.wall_deadline:
+            if time.monotonic() > wall_deadline:
+                self.missions.abandon("timeout")
                 raise TimeoutError("wall-clock limit reached at sim time %.1f s" % t)
             time.sleep(0.02)
+
+    def _landed_decision(self, since):
+        for decision in reversed(self.decisions):
+            if decision.get("action") == "landed" and decision.get("t", 0.0) >= since:
+                return {"on_pad": (decision.get("value") or {}).get("on_pad"), "reason": decision.get("reason")}
+        return None
 
     def _latest_common_stamp(self):
         with self.poses_lock:
@@ -254,14 +465,19 @@ class FlightMonitor:
         stamp = self._latest_common_stamp()
         return float("-inf") if stamp is None else stamp.to_sec()
 
-    def scored(self, error, sim_start, sim_time, flight_wall):
+    def scored(self, error, aborted, sim_start, sim_time, flight_wall):
         """The result.json fields of the flight (SPEC section 7) from what was seen; ``error``: why the run
-        was cut short, or None."""
+        was cut short, or None; ``aborted``: the graph fell apart."""
         touchdown, resting_error = self.touchdown, self.resting_pad_error()
         outcome, touchdown_error = scoring.outcome(touchdown, resting_error, self.emergency_ordered)
         touchdown_time = touchdown.header.stamp.to_sec() if touchdown else None
-        return {
-            "outcome": outcome if error is None else "timeout",
+        records = self.missions.records
+        if self.s.get("missions"):
+            outcome = missions_mod.worst(r["outcome"] for r in records) if records else "timeout"
+            if len(records) < self.s["missions"]["count"] and outcome == "landed_on_pad":
+                outcome = "timeout"
+        result = {
+            "outcome": "aborted" if aborted else outcome if error is None else "timeout",
             "touchdown_error_m": touchdown_error,
             "time_to_land_s": round(touchdown_time - (self.landing_start or sim_start), 3)
             if touchdown_time is not None and not touchdown.crashed else None,
@@ -279,6 +495,27 @@ class FlightMonitor:
             "tracker_final_state": self.tracker_state,
             "error": error,
         }
+        if self.s.get("missions"):
+            result["missions"] = records
+            result["missions_on_pad"] = sum(r["outcome"] == "landed_on_pad" for r in records)
+            on_pad = [r["touchdown_error_m"] for r in records if r["touchdown_error_m"] is not None]
+            result["touchdown_error_m"] = round(max(on_pad), 4) if on_pad else None
+        result["faults"] = self.faults.results()
+        result["master_lost_at_s"] = self.master_lost_at
+        result["recorder_deaths"] = self.recorder_deaths
+        return result
+
+    def leave_graph(self, timeout=10.0):
+        """rospy's shutdown, bounded: with the master gone a registration still retrying holds rospy's topic lock, and
+        the shutdown waits for it for ever."""
+        def shut_down():
+            self.faults.close()
+            self.rospy.signal_shutdown("scenario finished")
+        thread = threading.Thread(target=shut_down, name="leave_graph", daemon=True)
+        thread.start()
+        thread.join(timeout)
+        if thread.is_alive():
+            self.rospy.logwarn("rospy did not shut down within %.0f s (the master is gone?): leaving it behind", timeout)
 
     def resting_pad_error(self):
         """Horizontal drone-to-pad distance at the latest instant both poses are known for."""
@@ -290,59 +527,161 @@ class FlightMonitor:
         return ((drone.x - pad.x) ** 2 + (drone.y - pad.y) ** 2) ** 0.5
 
 
+def launch_failure(log_path):
+    """What roslaunch said about the node whose death ended it (the last 'REQUIRED process' line), if anything."""
+    try:
+        with open(log_path, errors="replace") as stream:
+            text = stream.read()
+    except OSError:
+        return "no launch log"
+    deaths = [d for d in processes.deaths_in_launch_log(text) if d["required"]]
+    if deaths:
+        return "required node %s died (exit code %d); see %s" % (deaths[-1]["node"], deaths[-1]["exit_code"], log_path)
+    return "see %s" % log_path
+
+
+def write_result(out_dir, result):
+    """result.json, atomically: a reader sees the old file or the whole new one, never a part."""
+    path = os.path.join(out_dir, "result.json")
+    temporary = path + ".tmp"
+    with open(temporary, "w") as stream:
+        json.dump(result, stream, indent=2)
+        stream.flush()
+        os.fsync(stream.fileno())
+    os.replace(temporary, path)
+    return path
+
+
+def repair_bags(bags, timeout=30.0):
+    """A bag whose recorder was killed is left as NAME.active without an index: reindex it (rosbag reindex)
+    and give it its name. Returns the bags as they are now (an unrepaired one keeps its .active name: the
+    analysis reads it record by record)."""
+    repaired = []
+    for bag in bags:
+        active = bag + ".active"
+        if os.path.isfile(bag) or not os.path.isfile(active):
+            repaired.append(bag if os.path.isfile(bag) else None)
+            continue
+        try:
+            done = subprocess.run(["rosbag", "reindex", "--quiet", active], capture_output=True, text=True,
+                                  timeout=timeout).returncode == 0
+        except (OSError, subprocess.TimeoutExpired):
+            done = False
+        backup = bag + ".orig.active"
+        if done:
+            os.replace(active, bag)
+            if os.path.isfile(backup):
+                os.remove(backup)
+            repaired.append(bag)
+        else:
+            repaired.append(active)
+    return repaired
+
+
 def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None):
     """Run one scenario (in the realism profile ``realism`` if given, else the scenario's); returns the
-    result dict (also written to out_dir/result.json)."""
+    result dict (also written to out_dir/result.json, whatever happens after the scenario file was read)."""
     s = scenario_mod.load(scenario_path, realism)
     s["_needs_tracker"] = landing_stack
     s["_supervisor"] = supervisor and landing_stack
     os.makedirs(out_dir, exist_ok=True)
-    bag = os.path.abspath(os.path.join(out_dir, "flight.bag"))
     # Without an operator event the operator chooses the landing mode at once, unless the scenario tests
     # what happens when nobody chooses (supervisor: {no_operator: true}).
     no_operator = bool(s["supervisor"].get("no_operator"))
     events = s["events"] if no_operator or any("operator" in e for e in s["events"]) else \
         [{"at_s": 0.0, "operator": "landing"}] + s["events"]
     launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
-              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s)
+              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s) + \
+        (["station:=true"] if s["fuzz"] else [])  # garbage reaches the operator station's inputs too
     wall_start = time.monotonic()
-    wall_timeout = wall_timeout or max(300.0, 4.0 * s["time_limit_s"])
+    limits = wall_limits(s["time_limit_s"], wall_timeout)
     result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path),
               "realism": {"profile": s["realism"]["profile"], "overrides": s["realism"]["overrides"],
-                          "values": s["realism"]["values"]}}
-    with IsolatedLaunch(launch, os.path.join(out_dir, "launch.log")) as ros:
-        os.environ["ROS_MASTER_URI"] = ros.master_uri
-        ros.wait_for_master()
-        monitor = FlightMonitor(s, wall_timeout)
-        monitor.wait_for_graph()
-        recorder = IsolatedProcess(recorder_command(bag), os.path.join(out_dir, "recorder.log"), ros.master_uri)
-        with recorder:
-            monitor.wait_for_recorder(recorder)
-            monitor.wait_for_connections()
-            monitor.release()
+                          "values": s["realism"]["values"]},
+              "wall_limits_s": limits}
+    phases = {"start_up": None, "flight": 0.0}
+    monitor, recorders = None, None
+    try:
+        with contextlib.ExitStack() as stack:
+            # The master in a process tree of its own: one roslaunch started would end the whole graph with it.
+            core = stack.enter_context(IsolatedCore(os.path.join(out_dir, "core.log")))
+            os.environ["ROS_MASTER_URI"] = core.master_uri
+            start_deadline = wall_start + limits["start_up"]
+            core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
+            ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(out_dir, "launch.log"), port=core.port))
+            recorders = Recorders(out_dir, ros.master_uri, stack)
+            monitor = FlightMonitor(s, ros, recorders, core)
+            monitor.wait_for_graph(start_deadline)
+            monitor.wait_for_recorder(recorders.start(), start_deadline)
+            monitor.wait_for_connections(start_deadline)
+            fuzzer = None
+            if s["fuzz"]:
+                from . import fuzz
+                fuzzer = stack.enter_context(IsolatedProcess(fuzz.command(s["fuzz"], out_dir),
+                                                             os.path.join(out_dir, "fuzz.log"), ros.master_uri))
+                fuzz.wait_until_ready(out_dir, fuzzer, start_deadline)
+            monitor.release(start_deadline)
             sim_start = monitor.rospy.get_time()
             wall_flight_start = time.monotonic()
-            startup_wall = wall_flight_start - wall_start
+            phases["start_up"] = wall_flight_start - wall_start
+            start = monitor.sample_resources("start", wall_start)
+            # Where each process of the graph listens (README, "Security": loopback unless asked otherwise).
+            result["listening"] = {name: processes.listening(info["pid"]) for name, info in start["nodes"].items()}
+            error, aborted = None, False
             try:
-                monitor.run(EventSchedule(events), s["time_limit_s"])
-                error = None
+                monitor.run(EventSchedule(events), s["time_limit_s"], wall_flight_start + limits["flight"], wall_start)
             except TimeoutError as err:
                 error = str(err)
+            except GraphFailure as err:
+                error, aborted = str(err), True
+                monitor.missions.abandon("aborted")
             sim_time = monitor.rospy.get_time()
-            flight_wall = time.monotonic() - wall_flight_start
+            phases["flight"] = time.monotonic() - wall_flight_start
+            if time.monotonic() - wall_start - monitor.resources.samples[-1]["wall_s"] > 5.0:
+                monitor.sample_resources("end", wall_start)  # (a mission that just ended has its own sample)
             # The result needs neither the bag nor the graph any more: they stop side by side while it is
             # scored and this process leaves the graph.
-            recorder.interrupt()
-            ros.interrupt()
-            result.update(monitor.scored(error, sim_start, sim_time, flight_wall))
-            monitor.rospy.signal_shutdown("scenario finished")
+            # (The master stops last, when the stack unwinds: nodes unregister from it as they stop.)
+            for process in ([fuzzer] if fuzzer else []) + ([recorders.current] if recorders.current else []) + [ros]:
+                process.interrupt()
+            result.update(monitor.scored(error, aborted, sim_start, sim_time, phases["flight"]))
+            if fuzzer is not None:
+                result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
+            monitor.leave_graph()
+    except Exception as err:  # noqa: BLE001 (whatever went wrong, the run leaves its result and the reason)
+        # The graph never came up (or the run could not even start): still a result, with the reason.
+        result.update(outcome="aborted", error="%s: %s" % (type(err).__name__, err), touchdown_error_m=None,
+                      time_to_land_s=None, decisions=monitor.decisions if monitor else [])
+    except KeyboardInterrupt as err:
+        result.update(outcome="aborted", error="interrupted (%s)" % (err or "Ctrl-C"), touchdown_error_m=None,
+                      time_to_land_s=None, decisions=monitor.decisions if monitor else [])
+        finish(result, out_dir, wall_start, phases, monitor, recorders)
+        raise
+    return finish(result, out_dir, wall_start, phases, monitor, recorders)
+
+
+def finish(result, out_dir, wall_start, phases, monitor, recorders):
+    """Repair the bags, add the run's bookkeeping and write result.json."""
+    bags = repair_bags(recorders.bags if recorders else [])
+    result["bag"] = bags[0] if bags else None
+    if len(bags) > 1:
+        result["bags"] = bags
+    if monitor is not None:
+        result["resources"] = {"samples": monitor.resources.samples, "table": monitor.resources.table(
+            baseline=1 if len(monitor.resources.samples) > 3 else 0)}
+    try:
+        with open(os.path.join(out_dir, "launch.log"), errors="replace") as stream:
+            result["node_deaths"] = processes.deaths_in_launch_log(stream.read())
+    except OSError:
+        result["node_deaths"] = []
     result["wall_time_s"] = round(time.monotonic() - wall_start, 2)
     # Where the wall time went: starting the master, graph and recorder; the flight; stopping them.
-    result["wall_phases_s"] = {"start_up": round(startup_wall, 2), "flight": round(flight_wall, 2),
-                               "shut_down": round(result["wall_time_s"] - startup_wall - flight_wall, 2)}
-    result["bag"] = bag if os.path.isfile(bag) else None
-    with open(os.path.join(out_dir, "result.json"), "w") as stream:
-        json.dump(result, stream, indent=2)
+    start_up = phases["start_up"] if phases["start_up"] is not None else result["wall_time_s"]
+    result["wall_phases_s"] = {"start_up": round(start_up, 2), "flight": round(phases["flight"], 2),
+                               "shut_down": round(result["wall_time_s"] - start_up - phases["flight"], 2)}
+    result.setdefault("sim_time_s", None)
+    result.setdefault("real_time_factor", None)
+    write_result(out_dir, result)
     return result
 
 
@@ -358,7 +697,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description="Run one landing scenario headless; write result.json and flight.bag.")
     parser.add_argument("scenario", help="scenario YAML file (SPEC section 7)")
     parser.add_argument("--out", required=True, help="output directory")
-    parser.add_argument("--wall-timeout", type=float, default=None, help="wall-clock limit [s]")
+    parser.add_argument("--wall-timeout", type=float, default=None,
+                        help="wall-clock limit of the flight [s] (default: 4 x its time limit, at least 300 s); "
+                             "start-up and shut-down have %.0f s more" % (START_UP_WALL_S + SHUT_DOWN_WALL_S))
     parser.add_argument("--no-landing-stack", action="store_true", help="simulator and vehicle only")
     parser.add_argument("--no-supervisor", action="store_true", help="landing stack without the supervisor")
     parser.add_argument("--realism", choices=("ideal", "realistic", "harsh"), default=None,
@@ -366,22 +707,26 @@ def main(argv=None):
                              "single keys the scenario overrides stay overridden")
     args = parser.parse_args(argv)
     stop_on_sigterm()
+    # `kill -USR1 PID` prints where every thread of a run that seems stuck is (to stderr, the run's log).
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     try:
         result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack,
                      supervisor=not args.no_supervisor, realism=args.realism)
     except scenario_mod.ScenarioError as err:
         print("run_scenario: %s" % err, file=sys.stderr)
         return 2
-    except (RuntimeError, TimeoutError) as err:
-        print("run_scenario: %s (logs in %s)" % (err, args.out), file=sys.stderr)
-        return 3
     summary = "%s (%s): %s" % (result["name"], result["realism"]["profile"], result["outcome"])
+    if result.get("missions") is not None:
+        summary += ", %d of %d missions on the pad" % (result["missions_on_pad"], len(result["missions"]))
     if result["touchdown_error_m"] is not None:
         summary += ", touchdown error %.3f m" % result["touchdown_error_m"]
-    if result["time_to_land_s"] is not None:
+    if result["time_to_land_s"] is not None and result.get("missions") is None:
         summary += ", landed after %.1f s" % result["time_to_land_s"]
-    summary += " (sim %.1f s in %.1f s wall, %.1fx)" % (result["sim_time_s"], result["wall_time_s"],
-                                                       result["real_time_factor"] or 0.0)
+    if result["sim_time_s"] is not None:
+        summary += " (sim %.1f s in %.1f s wall, %.1fx)" % (result["sim_time_s"], result["wall_time_s"],
+                                                           result["real_time_factor"] or 0.0)
     print(summary)
+    if result.get("error"):
+        print("run_scenario: %s (logs in %s)" % (result["error"], args.out), file=sys.stderr)
     print("result: %s" % os.path.join(args.out, "result.json"))
-    return 0
+    return 3 if result["outcome"] == "aborted" else 0

@@ -13,7 +13,12 @@ OPERATOR_ACTIONS = ("landing", "emergency", "manual", "continue", "quit", "takeo
 FAULTS = ("camera_blackout", "kill_node", "detection_false_target")
 CONDITION_PARAMS = ("wind_speed", "wind_direction_deg", "wind_gust", "drone_battery", "control_battery", "temp",
                     "drone_speed")
-OUTCOMES = ("landed_on_pad", "landed_off_pad", "emergency_landed", "crashed", "timeout")
+OUTCOMES = ("landed_on_pad", "landed_off_pad", "emergency_landed", "crashed", "timeout", "aborted")
+# kill_node: the signal sent to the node's process. KILL is a crash (a bug, the OOM killer): no clean-up at all.
+KILL_SIGNALS = ("KILL", "TERM", "INT")
+# Not ROS nodes of the launch but killable as such: the ROS master and the runner's flight recorder.
+MASTER = "master"
+MISSION_CONDITIONS = ("wind_speed", "wind_direction_deg", "gust_mps", "temp", "control_battery")
 
 
 class ScenarioError(ValueError):
@@ -49,12 +54,13 @@ def _mapping(value, where, known):
 def validate(data, source):
     """Validated scenario dict with every optional field filled in."""
     top = _mapping(data, source, ("name", "seed", "time_limit_s", "platform", "drone", "conditions", "sensors",
-                                  "events", "expect", "description", "supervisor", "tracking", "realism"))
+                                  "events", "expect", "description", "supervisor", "tracking", "realism", "missions",
+                                  "fuzz"))
     if "name" not in top or not isinstance(top["name"], str) or not top["name"]:
         raise ScenarioError("%s: field 'name' is required (a non-empty string)" % source)
     out = {"name": top["name"], "description": str(top.get("description", "")),
            "seed": _number(top.get("seed", 0), "%s: field 'seed'" % source, 0, 2 ** 31 - 1, integer=True),
-           "time_limit_s": _number(top.get("time_limit_s", 180.0), "%s: field 'time_limit_s'" % source, 1.0, 3600.0)}
+           "time_limit_s": _number(top.get("time_limit_s", 180.0), "%s: field 'time_limit_s'" % source, 1.0, 86400.0)}
 
     where = "%s: field 'platform" % source
     platform = _mapping(top.get("platform"), where + "'", ("vehicle", "path", "speed_mps", "radius_m"))
@@ -106,6 +112,8 @@ def validate(data, source):
         raise ScenarioError("%s: field 'events': expected a list, got %r" % (source, events))
     out["events"] = [_event(e, "%s: field 'events[%d]" % (source, i)) for i, e in enumerate(events)]
     out["events"].sort(key=lambda e: e["at_s"])
+    out["missions"] = _missions(top.get("missions"), "%s: field 'missions" % source)
+    out["fuzz"] = _fuzz(top.get("fuzz"), "%s: field 'fuzz" % source)
     for key in ("expect", "supervisor", "tracking"):
         value = top.get(key, {}) or {}
         if not isinstance(value, dict):
@@ -142,10 +150,11 @@ def realism_of(selection, where, profile=None):
 
 
 def _event(event, where):
-    event = _mapping(event, where + "'", ("at_s", "operator", "set_param", "value", "fault", "duration_s", "name"))
+    event = _mapping(event, where + "'", ("at_s", "operator", "set_param", "value", "fault", "duration_s", "name",
+                                          "signal"))
     if "at_s" not in event:
         raise ScenarioError("%s.at_s': required (sim seconds)" % where)
-    out = {"at_s": _number(event["at_s"], where + ".at_s'", 0.0, 3600.0)}
+    out = {"at_s": _number(event["at_s"], where + ".at_s'", 0.0, 86400.0)}
     kinds = [k for k in ("operator", "set_param", "fault") if k in event]
     if len(kinds) != 1:
         raise ScenarioError("%s': needs exactly one of operator, set_param, fault; got %s" % (where, kinds or "none"))
@@ -161,10 +170,52 @@ def _event(event, where):
         out["fault"] = _choice(event["fault"], where + ".fault'", FAULTS)
         out["duration_s"] = _number(event.get("duration_s", 2.0), where + ".duration_s'", 0.0, 600.0)
         if out["fault"] == "kill_node":
-            if not isinstance(event.get("name"), str):
-                raise ScenarioError("%s.name': kill_node needs the node's name" % where)
+            if not isinstance(event.get("name"), str) or not event["name"].strip("/"):
+                raise ScenarioError("%s.name': kill_node needs the node's name (or %r for the ROS master)"
+                                    % (where, MASTER))
             out["name"] = event["name"]
+            out["signal"] = _choice(event.get("signal", "KILL"), where + ".signal'", KILL_SIGNALS)
+    if "signal" in event and out.get("fault") != "kill_node":
+        raise ScenarioError("%s.signal': only kill_node takes a signal" % where)
     return out
+
+
+def _missions(value, where):
+    """Repeated missions in one session: after each landing the drone waits ``pause_s`` on the pad, the next
+    entry of ``conditions`` (cycled) is set, the battery is swapped when below ``battery_swap_below``, and the
+    operator starts the landing mission again, ``count`` missions in all. None: one mission."""
+    if value is None:
+        return None
+    value = _mapping(value, where + "'", ("count", "pause_s", "conditions", "battery_swap_below"))
+    if "count" not in value:
+        raise ScenarioError("%s.count': required (missions in a row)" % where)
+    out = {"count": _number(value["count"], where + ".count'", 1, 10000, integer=True),
+           "pause_s": _number(value.get("pause_s", 10.0), where + ".pause_s'", 0.0, 3600.0),
+           "battery_swap_below": _number(value.get("battery_swap_below", 50.0), where + ".battery_swap_below'",
+                                         0.0, 100.0),
+           "conditions": []}
+    conditions = value.get("conditions", []) or []
+    if not isinstance(conditions, list):
+        raise ScenarioError("%s.conditions': expected a list of mappings, got %r" % (where, conditions))
+    for i, entry in enumerate(conditions):
+        here = "%s.conditions[%d]" % (where, i)
+        entry = _mapping(entry, here + "'", MISSION_CONDITIONS)
+        out["conditions"].append({k: _number(v, "%s.%s'" % (here, k), -360.0, 360.0) for k, v in entry.items()})
+    return out
+
+
+def _fuzz(value, where):
+    """Seeded garbage on every input topic of the graph from ``start_s`` for ``duration_s`` (sim s): one
+    garbage message per topic every ``period_s`` on average, and a burst at ten times a topic's rate every
+    ``burst_every_s``. None: no fuzzing."""
+    if value is None:
+        return None
+    value = _mapping(value, where + "'", ("start_s", "duration_s", "period_s", "burst_every_s", "seed"))
+    return {"start_s": _number(value.get("start_s", 5.0), where + ".start_s'", 0.0, 86400.0),
+            "duration_s": _number(value.get("duration_s", 60.0), where + ".duration_s'", 0.1, 86400.0),
+            "period_s": _number(value.get("period_s", 1.0), where + ".period_s'", 0.01, 600.0),
+            "burst_every_s": _number(value.get("burst_every_s", 10.0), where + ".burst_every_s'", 0.1, 86400.0),
+            "seed": _number(value.get("seed", 0), where + ".seed'", 0, 2 ** 31 - 1, integer=True)}
 
 
 def load(path, realism_profile=None):

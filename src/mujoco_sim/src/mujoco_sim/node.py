@@ -18,6 +18,7 @@ import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from landing_msgs.geometry import euler_from_quaternion
+from landing_msgs.input_check import RosRejectionLog
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
 from landing_msgs.rospy_node import init_node
 from nav_msgs.msg import Odometry
@@ -78,6 +79,7 @@ class SimNode:
         self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
         lockstep = self.cfg["lockstep"]
+        self.rejections = RosRejectionLog()  # garbage on the inputs: what was wrong, once per topic and kind
         self.lockstep = LockstepGate(lockstep["max_lead_s"], lockstep["stale_after_wall_s"], log=rospy.loginfo) \
             if lockstep["enabled"] else None
         self.conditions = {}
@@ -175,13 +177,25 @@ class SimNode:
             rospy.Subscriber("lockstep_ack", LockstepAck, self._on_lockstep_ack, queue_size=100, tcp_nodelay=True)
 
     def _on_lockstep_ack(self, msg):
-        self.lockstep.acknowledge(msg.node, msg.input, msg.stamp.to_sec(), msg.period.to_sec())
+        # An acknowledgement holds the physics: only a node's own, about a time that has been, with a sane period.
+        sender = (getattr(msg, "_connection_header", None) or {}).get("callerid")
+        stamp, period = msg.stamp.to_sec(), msg.period.to_sec()
+        if sender is not None and msg.node != sender:
+            problem = ("malformed", "node %r acknowledged as %r" % (sender, msg.node[:60]))
+        elif not 0.0 <= period <= 10.0:
+            problem = ("out of range", "period %.3g s outside 0..10 s" % period)
+        elif stamp > self.sim.time + 1.0:
+            problem = ("stamp from the future", "stamp %.3f s, sim time %.3f s" % (stamp, self.sim.time))
+        else:
+            return self.lockstep.acknowledge(msg.node, msg.input, stamp, period)
+        self.rejections.reject("lockstep_ack", problem)
 
     def _on_cmd_vel(self, msg):
         problem = self.sim.set_velocity_command(msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.z)
         if problem:
-            rospy.logwarn_throttle(2.0, "ignored /ardrone/cmd_vel with %s: the drone holds its position; "
-                                        "send finite velocities in m/s and rad/s" % problem)
+            self.rejections.reject("ardrone/cmd_vel", ("non-finite" if "non-finite" in problem else "out of range",
+                                                       "%s: the drone holds its position; send finite velocities in "
+                                                       "m/s and rad/s" % problem))
 
     def _on_fault(self, msg):
         """JSON {"fault": "camera_blackout" | "detection_false_target", "duration_s": seconds}."""
@@ -200,8 +214,9 @@ class SimNode:
     def _on_vehicle_cmd(self, msg):
         problem = self.sim.set_vehicle_command(msg.linear.x, msg.angular.z)
         if problem:
-            rospy.logwarn_throttle(2.0, "ignored /summit_xl_control/cmd_vel with %s: the vehicle stops; "
-                                        "send finite speeds in m/s and rad/s" % problem)
+            self.rejections.reject("summit_xl_control/cmd_vel", (
+                "non-finite" if "non-finite" in problem else "out of range",
+                "%s: the vehicle stops; send finite speeds in m/s and rad/s" % problem))
 
     # ----- loop ----------------------------------------------------------------------------------
     def _wait_for_start_signal(self):
@@ -271,7 +286,11 @@ class SimNode:
             self.pub_clock.publish(Clock(clock=stamp))
             rospy.rostime._set_rostime(stamp)  # this node is the clock: it does not listen to /clock
         if due["conditions"]:
-            self._sync_conditions()
+            try:
+                self._sync_conditions()
+            except OSError as err:  # the master is gone: the world goes on with the conditions it has
+                rospy.logwarn_throttle(30.0, "cannot read the condition parameters (%s): the ROS master is "
+                                             "unreachable; keeping the conditions in force" % err)
         if due["camera"] and self.cfg["camera"]["enabled"] and not self.sim.camera_blacked_out() and \
                 (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()) and \
                 not self.sim.camera_frame_lost():

@@ -16,6 +16,7 @@
 #include "ped_traj_pred/delayed_fusion.h"
 
 #include <geometry_msgs/PointStamped.h>
+#include <landing_msgs/input_check.h>
 #include <landing_msgs/lockstep_acker.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
@@ -44,6 +45,10 @@ private:
   void onDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
   void onGps(const nav_msgs::Odometry::ConstPtr& msg);
   void onRelativeDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
+  /// A stamp too far from the clock, or a named value that is not finite or beyond +-limit.
+  std::optional<landing_msgs::InputProblem> inputProblem(const std_msgs::Header& header,
+                                                         std::initializer_list<std::pair<const char*, double>> values,
+                                                         double limit) const;
   /// Variance of a world fix stamped `stamp`, from the range of the relative fix of the same frame.
   double visionVariance(const ros::Time& stamp) const;
   void onTimer(const ros::TimerEvent& event);
@@ -69,6 +74,7 @@ private:
   bool tracking_ = false;     // as of the last timer tick, for logging the transitions once
   ros::Time last_tick_;
   std::optional<landing_msgs::LockstepAcker> lockstep_;  // created once pub_freq is known
+  landing_msgs::RejectionLog rejections_;  // garbage on the inputs: what was wrong, once per topic and kind
 };
 
 }  // namespace ped_traj_pred

@@ -16,7 +16,9 @@ platform_tracking ardrone/odom_estimate, kalman_prediction_path, kalman_platform
                  on every change), platform_tracking/target (geometry_msgs/PointStamped, world: where the
                  pad is believed to be at each step, for rviz and the flight analysis).
 
-Operator requests: platform_tracking/command (std_msgs/String: takeoff | land | force_land) is the
+Operator requests: platform_tracking/command (std_msgs/String: takeoff | land | force_land | hold; hold
+forgets a pending take-off or land request: the supervisor sends it when another module has the drone or
+the mission is over, so a restarted tracker that reads the latched command does not take off again) is the
 unambiguous way. The thesis topics work too: ardrone/force_land (Empty); ardrone/takeoff and
 ardrone/land (Empty) from anyone but this node (messages whose publisher is this node, i.e. its own
 actions, are recognised by the connection header and ignored). Note that the drone itself also obeys
@@ -24,7 +26,9 @@ ardrone/takeoff and ardrone/land: an operator's ardrone/land makes it descend at
 tracker then follows the pad down (state LANDING, committed) rather than starting its own approach;
 use platform_tracking/command "land" for the gated landing on the pad.
 
-Inputs with a non-finite value are dropped with a throttled warning naming the topic.
+Inputs that are garbage (non-finite or implausible values, stamps from another time, frames of another tree,
+unknown words) are dropped with a warning naming the topic and what was wrong, once per topic and kind of
+problem every WARN_PERIOD (landing_msgs.input_check).
 """
 import collections
 import math
@@ -35,6 +39,8 @@ import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped, Twist, Vector3Stamped
 from landing_msgs.geometry import yaw_from_quaternion
+from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
+                                      first_problem, frame_problem, numbers_problem, stamp_problem)
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
 from landing_msgs.rospy_node import init_node, spin
@@ -51,15 +57,28 @@ from .state_machine import Inputs, State, TrackingStateMachine
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
 WORLD_FRAMES = ("world", "/world", "")
-COMMANDS = ("takeoff", "land", "force_land")
+COMMANDS = ("takeoff", "land", "force_land", "hold")
+BODY_FRAME = "ardrone/base_link"  # the drone's body frame (docs/conventions.md): sonar and relative pad positions
+
+
+NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes (state_machine.Nav)
 
 
 def finite(*values):
     return all(math.isfinite(v) for v in values)
 
 
-def warn_dropped(topic, why):
-    rospy.logwarn_throttle(WARN_PERIOD, "dropped a message on %s: %s" % (rospy.resolve_name(topic), why))
+def header_problem(msg, frames=None):
+    """A stamp too far from the clock, or (``frames``: the names allowed) a frame of another tree."""
+    return first_problem(stamp_problem(msg.header.stamp.to_sec(), rospy.get_time()),
+                         frame_problem(msg.header.frame_id, frames) if frames else None)
+
+
+def odometry_problem(msg, frames=WORLD_FRAMES[:1], position_limit=MAX_POSITION_M):
+    """What is wrong with an Odometry in the world: stamp, frame, a position or velocity no vehicle has."""
+    p, v = msg.pose.pose.position, msg.twist.twist.linear
+    return header_problem(msg, frames) or numbers_problem(position_limit, position=(p.x, p.y, p.z)) or \
+        numbers_problem(MAX_SPEED_MPS, velocity=(v.x, v.y, v.z))
 
 
 def load_params(cls, check=None, namespace="~", exclude=()):
@@ -75,6 +94,14 @@ def load_params(cls, check=None, namespace="~", exclude=()):
     except ParamError as err:
         rospy.logfatal("%s cannot start: %s (see platform_tracking/config/)", rospy.get_name(), err)
         sys.exit(2)
+
+
+def sonar_problem(msg, base_frame):
+    """A range that is NaN or negative (+inf is valid: no echo), a stamp from another time or a frame not the
+    drone's body."""
+    if math.isnan(msg.range) or msg.range < 0.0:
+        return ("non-finite" if math.isnan(msg.range) else "out of range"), "range is %s" % msg.range
+    return header_problem(msg, (base_frame,))
 
 
 def stamp_of(msg):
@@ -100,6 +127,8 @@ class EstimatorNode:
         self.surface = load_flow_surface()
         self.lock = threading.Lock()
         self.estimator = self._new_estimator()
+        self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
+        self.clock = 0.0  # the latest clock seen by _at
         self.publisher = rospy.Publisher("ardrone/odom_estimate", Odometry, queue_size=10)
         self.pub_unseen = rospy.Publisher("ardrone/flow_unseen_velocity", Vector3Stamped, queue_size=10)
         self.lockstep = LockstepAcker("ardrone/imu")
@@ -119,44 +148,56 @@ class EstimatorNode:
 
     def on_pad(self, msg):
         p, v = msg.pose.pose.position, msg.twist.twist.linear
-        if not finite(p.x, p.y, p.z, v.x, v.y, v.z):
-            return warn_dropped("kalman_platform_odom", "non-finite value")
+        problem = odometry_problem(msg)
+        if problem:
+            return self.rejections.reject("kalman_platform_odom", problem)
         with self.lock:
             self.estimator.pad(stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z))
 
     def on_vehicle(self, msg):
         v, w = msg.twist.twist.linear, msg.twist.twist.angular.z
-        if not finite(v.x, v.y) or msg.twist.covariance[0] <= 0.0:
-            return warn_dropped("vehicle/gps/odom", "no finite velocity with a variance")
+        if not finite(v.x, v.y) or not msg.twist.covariance[0] > 0.0:
+            return self.rejections.reject("vehicle/gps/odom", ("non-finite" if not finite(v.x, v.y) else "malformed",
+                                                               "no finite velocity with a variance"))
+        problem = header_problem(msg, WORLD_FRAMES[:1]) or numbers_problem(MAX_SPEED_MPS, velocity=(v.x, v.y))
+        if problem:
+            return self.rejections.reject("vehicle/gps/odom", problem)
         with self.lock:
             self.estimator.vehicle(stamp_of(msg), (v.x, v.y), w if math.isfinite(w) else 0.0)
 
     def _at(self, t):
-        """Called with the lock held before using a measurement stamped ``t``: restarts the filter
-        when time jumped back (simulator reset, bag loop)."""
-        if self.estimator.time is not None and t < self.estimator.time - 1.0:
+        """Called with the lock held before using a measurement stamped ``t``: restarts the filter when the
+        clock jumped back (a new simulation, a bag loop). The clock, not the stamp: a message stamped from
+        another time is garbage (dropped by the callbacks), not a reason to forget the estimate."""
+        now = rospy.get_time()
+        if now < self.clock - 1.0 and self.estimator.time is not None:
             rospy.logwarn("drone_estimator: time jumped back from %.2f to %.2f s; restarting the estimate",
-                          self.estimator.time, t)
+                          self.clock, now)
             self.estimator = self._new_estimator()
+        self.clock = now
 
     def on_imu(self, msg):
         q = msg.orientation
         if not finite(q.w, q.x, q.y, q.z):
-            return warn_dropped("ardrone/imu", "non-finite orientation")
+            return self.rejections.reject("ardrone/imu", ("non-finite", "non-finite orientation"))
+        problem = header_problem(msg, (self.params.child_frame_id,))
+        if problem:
+            return self.rejections.reject("ardrone/imu", problem)
         t = stamp_of(msg)
         with self.lock:
             self._at(t)
             a = msg.linear_acceleration
             if not self.estimator.imu(t, (q.w, q.x, q.y, q.z), (a.x, a.y, a.z)):
-                return warn_dropped("ardrone/imu", "orientation is not a unit quaternion")
+                return self.rejections.reject("ardrone/imu", ("non-finite", "orientation is not a unit quaternion"))
             estimate = self.estimator.estimate(t)
         if estimate is not None:
             self.publish(msg, estimate)
         self.lockstep.ack(msg.header.stamp)
 
     def on_navdata(self, msg):
-        if not finite(msg.vx, msg.vy, msg.vz):
-            return warn_dropped("ardrone/navdata", "non-finite velocity")
+        problem = numbers_problem(MAX_SPEED_MPS, velocity=(msg.vx, msg.vy, msg.vz)) or header_problem(msg)
+        if problem:
+            return self.rejections.reject("ardrone/navdata", problem)
         t = stamp_of(msg)
         with self.lock:
             self._at(t)
@@ -172,24 +213,32 @@ class EstimatorNode:
     def on_gps(self, msg):
         p, v = msg.pose.pose.position, msg.twist.twist.linear
         if not finite(p.x, p.y, p.z):
-            return warn_dropped("ardrone/gps/odom", "non-finite position")
+            return self.rejections.reject("ardrone/gps/odom", ("non-finite", "non-finite position"))
+        problem = header_problem(msg, WORLD_FRAMES[:1]) or numbers_problem(MAX_POSITION_M, position=(p.x, p.y, p.z))
+        if problem:
+            return self.rejections.reject("ardrone/gps/odom", problem)
+        # A fix without a velocity (NaN) is still a fix; an implausible velocity makes the whole fix suspect.
         velocity = (v.x, v.y, v.z) if finite(v.x, v.y, v.z) else None
+        if velocity is not None and numbers_problem(MAX_SPEED_MPS, velocity=velocity):
+            return self.rejections.reject("ardrone/gps/odom", numbers_problem(MAX_SPEED_MPS, velocity=velocity))
         t = stamp_of(msg)
         with self.lock:
             self._at(t)
             self.estimator.gps(t, (p.x, p.y, p.z), velocity)
 
     def on_altimeter(self, msg):
-        if not finite(msg.altitude):
-            return warn_dropped("ardrone/altimeter", "non-finite altitude")
+        problem = numbers_problem(MAX_ALTITUDE_M, altitude=msg.altitude) or header_problem(msg)
+        if problem:
+            return self.rejections.reject("ardrone/altimeter", problem)
         t = stamp_of(msg)
         with self.lock:
             self._at(t)
             self.estimator.altimeter(t, msg.altitude)
 
     def on_sonar(self, msg):
-        if math.isnan(msg.range):
-            return warn_dropped("ardrone/sonar_height", "range is NaN")
+        problem = sonar_problem(msg, self.params.child_frame_id)
+        if problem:
+            return self.rejections.reject("ardrone/sonar_height", problem)
         t = stamp_of(msg)
         with self.lock:
             self._at(t)
@@ -248,6 +297,7 @@ class TrackingNode:
     def __init__(self):
         self.params = load_params(TrackingParams, check=True)
         self.lock = threading.Lock()
+        self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
         self.estimate = None          # (stamp, DroneState without sonar)
         self.unseen = None            # (stamp, world xy, weight) of the vehicle's velocity the flow does not see
@@ -258,7 +308,7 @@ class TrackingNode:
         self.path = None              # (times, positions) of the latest kalman_prediction_path
         self.pad_odom = None          # (stamp, position, velocity) of the latest kalman_platform_odom
         self.prediction = None        # PadPrediction built from the two, cached until one changes
-        self.requests = set()
+        self.requests = []            # operator requests since the last step, in arrival order
         self.landing_allowed = True
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.me = rospy.get_caller_id()
@@ -286,57 +336,69 @@ class TrackingNode:
     # ----- inputs ------------------------------------------------------------------------------
     def on_estimate(self, msg):
         p, v, q = msg.pose.pose.position, msg.twist.twist.linear, msg.pose.pose.orientation
-        if not finite(p.x, p.y, p.z, v.x, v.y, v.z, q.w, q.x, q.y, q.z):
-            return warn_dropped("ardrone/odom_estimate", "non-finite value")
-        if msg.header.frame_id not in WORLD_FRAMES:
-            return warn_dropped("ardrone/odom_estimate", "frame '%s', expected 'world'" % msg.header.frame_id)
+        problem = odometry_problem(msg) or numbers_problem(1.5, orientation=(q.w, q.x, q.y, q.z))
+        if problem:
+            return self.rejections.reject("ardrone/odom_estimate", problem)
         state = DroneState(np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]), yaw_from_quaternion(q.w, q.x, q.y, q.z))
         with self.lock:
             self.estimate = (stamp_of(msg), state)
 
     def on_unseen(self, msg):
-        if not finite(msg.vector.x, msg.vector.y):
-            return warn_dropped("ardrone/flow_unseen_velocity", "non-finite value")
+        problem = numbers_problem(MAX_SPEED_MPS, vector=(msg.vector.x, msg.vector.y)) or \
+            header_problem(msg, WORLD_FRAMES[:1])
+        if problem:
+            return self.rejections.reject("ardrone/flow_unseen_velocity", problem)
         with self.lock:
             self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]),
                            float(msg.vector.z) if math.isfinite(msg.vector.z) else 0.0)
             self.flow_weight.add(self.unseen[0], self.unseen[2])
 
     def on_path(self, msg):
-        if msg.header.frame_id not in WORLD_FRAMES:
-            return warn_dropped("kalman_prediction_path", "frame '%s', expected 'world'" % msg.header.frame_id)
+        problem = header_problem(msg, WORLD_FRAMES[:1])
+        if problem:
+            return self.rejections.reject("kalman_prediction_path", problem)
         if not msg.poses:
-            return warn_dropped("kalman_prediction_path", "no poses")
+            return self.rejections.reject("kalman_prediction_path", ("empty", "a path without poses"))
         positions = [(s.pose.position.x, s.pose.position.y, s.pose.position.z) for s in msg.poses]
-        if not all(finite(*xyz) for xyz in positions):
-            return warn_dropped("kalman_prediction_path", "non-finite position")
+        problem = numbers_problem(MAX_POSITION_M, position=[c for xyz in positions for c in xyz])
+        if problem:
+            return self.rejections.reject("kalman_prediction_path", problem)
         times = [s.header.stamp.to_sec() for s in msg.poses]
-        if any(t <= 0.0 for t in times) or any(b <= a for a, b in zip(times, times[1:])):
+        if all(t == 0.0 for t in times):
             # Without per-pose times only the first pose (stamped with the message) can be used.
-            rospy.logwarn_throttle(WARN_PERIOD * 6, "%s: poses are not stamped with increasing future times; "
+            rospy.logwarn_throttle(WARN_PERIOD * 6, "%s: poses are not stamped with their future times; "
                                    "using only the first" % rospy.resolve_name("kalman_prediction_path"))
             times, positions = [stamp_of(msg)], positions[:1]
+        elif any(b <= a for a, b in zip(times, times[1:])) or \
+                stamp_problem(times[0], rospy.get_time()):  # the first pose is now (conventions.md)
+            # Which pose is when is unknown: using any would put the pad seconds away from where it is.
+            return self.rejections.reject("kalman_prediction_path", (
+                "malformed", "pose times %s are not now and on into the future" % ", ".join(
+                    "%.2f" % t for t in times[:4])))
         with self.lock:
             self.path = (times, positions)
             self.prediction = None
 
     def on_pad_odom(self, msg):
         p, v = msg.pose.pose.position, msg.twist.twist.linear
-        if not finite(p.x, p.y, p.z, v.x, v.y, v.z):
-            return warn_dropped("kalman_platform_odom", "non-finite value")
-        if msg.header.frame_id not in WORLD_FRAMES:
-            return warn_dropped("kalman_platform_odom", "frame '%s', expected 'world'" % msg.header.frame_id)
+        problem = odometry_problem(msg)
+        if problem:
+            return self.rejections.reject("kalman_platform_odom", problem)
         with self.lock:
             self.pad_odom = (stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z))
             self.prediction = None
 
     def on_navdata(self, msg):
+        problem = choice_problem(msg.state, NAVDATA_STATES, "state") or header_problem(msg)
+        if problem:
+            return self.rejections.reject("ardrone/navdata", problem)
         with self.lock:
             self.navdata_state = int(msg.state)
 
     def on_sonar(self, msg):
-        if math.isnan(msg.range):
-            return warn_dropped("ardrone/sonar_height", "range is NaN")
+        problem = sonar_problem(msg, BODY_FRAME)
+        if problem:
+            return self.rejections.reject("ardrone/sonar_height", problem)
         valid = math.isfinite(msg.range) and msg.range < msg.max_range if msg.max_range > 0 else math.isfinite(msg.range)
         with self.lock:
             self.sonar_ranges.append(float(msg.range) if valid else math.inf)
@@ -345,7 +407,12 @@ class TrackingNode:
 
     def on_detection(self, msg):
         # When it arrived, not when its image was taken: frames come 0.1-0.2 s late on a real link, and
-        # "seen" means the camera is still finding the pad (the prediction makes up for the delay).
+        # "seen" means the camera is still finding the pad (the prediction makes up for the delay). Garbage is
+        # no sighting.
+        p = msg.point
+        problem = numbers_problem(MAX_ALTITUDE_M, point=(p.x, p.y, p.z)) or header_problem(msg, (BODY_FRAME,))
+        if problem:
+            return self.rejections.reject("platform/current_platform_position_in_ardrone", problem)
         with self.lock:
             self.seen_at = rospy.get_time()
 
@@ -357,25 +424,33 @@ class TrackingNode:
 
     def on_command(self, msg):
         command = msg.data.strip().lower()
-        if command not in COMMANDS:
-            rospy.logwarn("platform_tracking: unknown command '%s' on %s; expected one of %s",
-                          msg.data, rospy.resolve_name("platform_tracking/command"), ", ".join(COMMANDS))
-            return
+        problem = choice_problem(command, COMMANDS, "command")
+        if problem:
+            return self.rejections.reject("platform_tracking/command", problem)
         with self.lock:
-            self.requests.add(command)
+            self.requests.append(command)
 
     def on_thesis_request(self, msg, command):
         header = getattr(msg, "_connection_header", None) or {}
         if header.get("callerid") == self.me:
             return  # our own take-off/land action coming back
         with self.lock:
-            self.requests.add(command)
+            self.requests.append(command)
 
     # ----- the step ----------------------------------------------------------------------------
     def _pad_prediction(self):
         if self.prediction is None:
             self.prediction = build_prediction(self.path, self.pad_odom)
         return self.prediction
+
+    def _take_requests(self):
+        """The operator requests since the last step (lock held), in order; a hold voids those before it and any
+        take-off or land the state machine still had pending."""
+        requests, self.requests = self.requests, []
+        if "hold" in requests:
+            self.machine.hold()
+            requests = requests[len(requests) - requests[::-1].index("hold"):]
+        return requests
 
     def step(self):
         now = rospy.Time.now()
@@ -388,11 +463,11 @@ class TrackingNode:
             fresh = self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE
             # The weight when the command reaches the drone: a navdata old now, and a link's delay later.
             flow_weight = self.flow_weight.at(t + self.params.flow_weight_lead) if fresh else 0.0
+            requests = self._take_requests()
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
-                            takeoff="takeoff" in self.requests, land="land" in self.requests,
-                            force_land="force_land" in self.requests, landing_allowed=self.landing_allowed,
+                            takeoff="takeoff" in requests, land="land" in requests,
+                            force_land="force_land" in requests, landing_allowed=self.landing_allowed,
                             vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight)
-            self.requests.clear()
         before = self.machine.state
         out = self.machine.step(inputs)
         if out.send_takeoff:
@@ -418,7 +493,7 @@ class TrackingNode:
         wait_for_clock()
         if self.params.autostart:
             with self.lock:
-                self.requests.add("takeoff")
+                self.requests.append("takeoff")
         rate = rospy.Rate(self.params.rate_hz)
         while not rospy.is_shutdown():
             self.step()

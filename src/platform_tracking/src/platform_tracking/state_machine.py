@@ -130,6 +130,11 @@ class TrackingStateMachine:
         self.takeoff_surface_z = None
         self._out = None
 
+    def hold(self):
+        """Forget a pending take-off or land request (another module has the drone, or the mission is over);
+        the state itself carries on."""
+        self.takeoff_pending = self.land_pending = False
+
     # ----- bookkeeping ---------------------------------------------------------------------------
     def _transition(self, new_state, reason, t):
         """The one place where the state changes."""

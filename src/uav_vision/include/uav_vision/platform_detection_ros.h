@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <image_transport/image_transport.h>
 #include <landing_msgs/Altimeter.h>
+#include <landing_msgs/input_check.h>
 #include <landing_msgs/lockstep_acker.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
@@ -64,6 +65,8 @@ class PlatformDetectionRos {
   // nearest one (at most odom_timeout away) with its velocity. The estimate trails the camera by the
   // estimator's latency, and the drone moves by metres per second, so the newest one is not good enough.
   std::optional<Eigen::Vector3d> dronePositionAt(const ros::Time& stamp) const;
+  // A stamp too far from the clock, or (``frame`` not empty) a frame other than ``frame``.
+  std::optional<landing_msgs::InputProblem> inputProblem(const std_msgs::Header& header, const std::string& frame) const;
   void publish(const std_msgs::Header& image_header, const PadObservation& observation);
   void publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image, const PadObservation& observation,
                          const CameraIntrinsics& intrinsics);
@@ -86,6 +89,7 @@ class PlatformDetectionRos {
   };
   std::deque<PositionEstimate> estimates_;  // last second of ardrone/odom_estimate
   landing_msgs::LockstepAcker lockstep_;
+  landing_msgs::RejectionLog rejections_;  // garbage on the inputs: what was wrong, once per topic and kind
 };
 
 }  // namespace uav_vision
