@@ -244,6 +244,26 @@ def stress_sets():
             short.append(scenario("short_straight_%gms_%s" % (speed, suffix), seed=seed + 20 + int(speed * 2),
                                   speed=speed, time_limit=60.0, description="a landing on a slow straight path"))
     sets["short_sweep"] = short
+    # The same scenarios and seeds in every realism profile (benchmark --realism): the Summit XL on each path at
+    # 1 and 3 m/s, every other one in 5 m/s wind with gusts, and the car on a straight road at 5, 10 and 15 m/s.
+    compare, seed = [], 4000
+    for path in ("straight",) + tuple(p for p in SUMMIT_PATHS if p != "straight"):
+        for speed in (1.0, 3.0):
+            seed += 1
+            windy = seed % 2 == 0
+            compare.append(scenario("compare_summit_%s_%gms%s" % (path, speed, "_wind5" if windy else ""), seed=seed,
+                                    path=path, speed=speed, radius=5.0 if path == "square" else 10.0,
+                                    conditions={"wind_speed": 5.0, "wind_direction_deg": 45.0 * (seed % 8),
+                                                "gust_mps": 1.25} if windy else None,
+                                    description="Summit XL on a %s path at %g m/s%s" % (
+                                        path, speed, ", 5 m/s wind with gusts" if windy else "")))
+    for speed in (5.0, 10.0, 15.0):
+        for k in range(2):
+            seed += 1
+            compare.append(scenario("compare_car_straight_%gms_%d" % (speed, k + 1), seed=seed, vehicle="car",
+                                    speed=speed, time_limit=150.0,
+                                    description="car on a straight road at %g m/s" % speed))
+    sets["realism_compare"] = compare
     return sets
 
 

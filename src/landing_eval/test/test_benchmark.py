@@ -111,3 +111,32 @@ def test_readme_block_is_replaced(tmp_path):
     text = readme.read_text()
     assert "old" not in text and "| table |" in text and "3 scenarios at commit `abc`" in text
     assert text.endswith("<!-- bench:end -->\nafter\n")
+
+
+def test_realism_replaces_each_scenarios_profile_and_reaches_the_run_and_the_summary(tmp_path):
+    (tmp_path / "a.yaml").write_text(SCENARIO % "alpha" + "realism: {profile: harsh, camera_latency_s: 0.2}\n")
+    (tmp_path / "b.yaml").write_text(SCENARIO % "beta")
+    files = benchmark.collect([str(tmp_path)])
+    specs, _ = benchmark.plan(files, 1, str(tmp_path / "out"))
+    assert [(s["row"]["realism"], s["realism"]) for s in specs] == [("harsh", None), ("realistic", None)]
+    specs, _ = benchmark.plan(files, 1, str(tmp_path / "out"), realism="ideal")
+    assert [(s["row"]["realism"], s["realism"]) for s in specs] == [("ideal", "ideal"), ("ideal", "ideal")]
+    rows = [dict(s["row"], outcome="landed_on_pad", passed=True, touchdown_error_m=0.05) for s in specs]
+    assert "| realism = ideal | 2/2 |" in benchmark.summarize(rows)
+
+
+def test_several_realism_profiles_run_each_scenario_in_each_under_its_own_name(tmp_path):
+    (tmp_path / "a.yaml").write_text(SCENARIO % "alpha")
+    specs, _ = benchmark.plan([str(tmp_path / "a.yaml")], 2, str(tmp_path / "out"), realism=["ideal", "harsh"])
+    assert [(s["row"]["name"], s["row"]["run"], s["realism"]) for s in specs] == [
+        ("alpha@ideal", 1, "ideal"), ("alpha@ideal", 2, "ideal"), ("alpha@harsh", 1, "harsh"),
+        ("alpha@harsh", 2, "harsh")]
+    assert [os.path.basename(s["out_dir"]) for s in specs] == ["alpha@ideal", "alpha@ideal.run2", "alpha@harsh",
+                                                               "alpha@harsh.run2"]
+    rows = [dict(s["row"], outcome="landed_on_pad", passed=True, touchdown_error_m=0.1, time_to_land_s=t)
+            for s, t in zip(specs, (20.0, 30.0, 40.0, 50.0))]
+    text = benchmark.summarize(rows)
+    assert "| realism = harsh | 2/2 | 2 | 0.100 | 0.100 | 0.100 | 45.0 |" in text
+    with pytest.raises(SystemExit) as exit_info:  # argparse's usage error, before anything runs
+        benchmark.main(["--realism", "ideal,sunny", "--out", str(tmp_path / "o"), str(tmp_path)])
+    assert exit_info.value.code == 2 and not (tmp_path / "o").exists()

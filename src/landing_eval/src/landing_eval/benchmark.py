@@ -75,14 +75,27 @@ def check_expectations(expect, result):
     return not problems, "; ".join(problems)
 
 
-def plan(files, repeat, out_root):
+def plan(files, repeat, out_root, realism=None):
     """(runs to make, rows of files that cannot be run). A run is a spec for run_pool.execute_run plus its
-    row's scenario fields; with ``repeat`` > 1 each scenario is run that often (run 1, 2, ...)."""
+    row's scenario fields; with ``repeat`` > 1 each scenario is run that often (run 1, 2, ...). ``realism``
+    (a profile name, or a list of them) replaces the profile every scenario asks for; with more than one,
+    each scenario runs in each, named NAME@PROFILE."""
+    profiles = realism if isinstance(realism, (list, tuple)) else [realism]
+    specs, bad = [], []
+    for profile in profiles:
+        suffix = "@%s" % profile if len(profiles) > 1 else ""
+        more_specs, more_bad = _plan_profile(files, repeat, out_root, profile, suffix)
+        specs += more_specs
+        bad += more_bad
+    return specs, bad
+
+
+def _plan_profile(files, repeat, out_root, realism, suffix):
     specs, bad, names = [], [], {}
     for path in files:
-        name = os.path.splitext(os.path.basename(path))[0]
+        name = os.path.splitext(os.path.basename(path))[0] + suffix
         try:
-            s = scenario_mod.load(path)
+            s = scenario_mod.load(path, realism)
             with open(path) as stream:
                 text = stream.read()
         except (scenario_mod.ScenarioError, OSError) as err:
@@ -93,15 +106,16 @@ def plan(files, repeat, out_root):
             raise ValueError("%s and %s both name their scenario %r: their runs would overwrite each other's output"
                              % (names[s["name"]], path, s["name"]))
         names[s["name"]] = path
-        row = {"file": path, "name": s["name"], "vehicle": s["platform"]["vehicle"], "path": s["platform"]["path"],
+        row = {"file": path, "name": s["name"] + suffix, "vehicle": s["platform"]["vehicle"], "path": s["platform"]["path"],
                "speed_mps": s["platform"]["speed_mps"], "wind_speed": s["conditions"]["wind_speed"],
-               "expected": json.dumps(s["expect"].get("outcome", "landed_on_pad")), "passed": False}
+               "realism": s["realism"]["profile"], "expected": json.dumps(s["expect"].get("outcome", "landed_on_pad")),
+               "passed": False}
         for run in range(1, repeat + 1):
-            label = s["name"] if run == 1 else "%s.run%d" % (s["name"], run)
+            label = s["name"] + suffix if run == 1 else "%s%s.run%d" % (s["name"], suffix, run)
             specs.append({"python": sys.executable, "file": os.path.abspath(path), "scenario_text": text,
                           "out_dir": os.path.abspath(os.path.join(out_root, label)),
                           "log": os.path.abspath(os.path.join(out_root, label + ".log")),
-                          "wall_timeout": wall_limits(s["time_limit_s"])["flight"],
+                          "wall_timeout": wall_limits(s["time_limit_s"])["flight"], "realism": realism,
                           "row": dict(row, run=run), "expect": s["expect"]})
     return specs, bad
 
@@ -132,7 +146,7 @@ def percentile(values, q):
     return values[low] + (values[high] - values[low]) * (index - low)
 
 
-def summarize(rows, groups=("vehicle", "path", "band")):
+def summarize(rows, groups=("realism", "vehicle", "path", "band")):
     """Markdown summary: totals, then one table per grouping."""
     for row in rows:
         row["band"] = speed_band(row.get("vehicle"), row.get("speed_mps") or 0.0) if row.get("vehicle") else "-"
@@ -146,11 +160,11 @@ def summarize(rows, groups=("vehicle", "path", "band")):
                 "%d" % sum(r.get("outcome") == "landed_on_pad" for r in subset),
                 fmt(sum(errors) / len(errors) if errors else None), fmt(percentile(errors, 0.95)),
                 fmt(max(errors) if errors else None),
-                "-" if not times else "%.1f" % (sum(times) / len(times)),
+                "-" if not times else "%.1f" % percentile(times, 0.5),
                 "%d" % sum(r.get("decisions") or 0 for r in subset),
                 "-" if not rtf else "%.1f" % (sum(rtf) / len(rtf)),
                 "%d" % sum(r.get("outcome") == "error" for r in subset)]
-    header = ["group", "passed", "on pad", "error mean [m]", "error p95 [m]", "error max [m]", "time to land [s]",
+    header = ["group", "passed", "on pad", "error mean [m]", "error p95 [m]", "error max [m]", "time to land median [s]",
               "decisions", "RTF", "errors"]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines.append("| **all** | " + " | ".join(stats(rows)) + " |")
@@ -270,7 +284,15 @@ def main(argv=None):
     parser.add_argument("--wall-timeout", type=float, default=None,
                         help="wall-clock limit of one flight [s] (default: 4 x its time limit, at least 300 s)")
     parser.add_argument("--readme", default=None, help="README whose bench block gets this run's table")
+    parser.add_argument("--realism", default=None, metavar="PROFILE[,PROFILE...]",
+                        help="realism profile of every run (default: each scenario's, else realistic; the "
+                             "scenario's single-key overrides still apply); several, comma-separated: each "
+                             "scenario runs in each (NAME@PROFILE), side by side in the summary")
     args = parser.parse_args(argv)
+    profiles = args.realism.split(",") if args.realism else [None]
+    unknown = [p for p in profiles if p not in ("ideal", "realistic", "harsh")] if args.realism else []
+    if unknown:
+        parser.error("--realism: unknown profile(s) %s (ideal, realistic, harsh)" % ", ".join(unknown))
     if args.repeat < 1 or args.jobs < 1 or args.cpus_per_scenario <= 0:
         parser.error("--repeat and --jobs must be >= 1 and --cpus-per-scenario > 0")
     files = collect(args.scenarios)
@@ -279,7 +301,7 @@ def main(argv=None):
         return 2
     os.makedirs(args.out, exist_ok=True)
     try:
-        specs, bad = plan(files, args.repeat, args.out)
+        specs, bad = plan(files, args.repeat, args.out, profiles)
         results = ResultsFile(os.path.join(args.out, "results.csv"), resume=args.resume)
     except (ValueError, ResultsFileError) as err:
         print("benchmark: %s" % err, file=sys.stderr)
@@ -305,7 +327,8 @@ def main(argv=None):
     try:
         with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       transient=False) as progress:
-            task = progress.add_task("scenarios", total=len(files) * args.repeat, completed=len(results.rows))
+            task = progress.add_task("scenarios", total=len(files) * args.repeat * len(profiles),
+                                     completed=len(results.rows))
             for spec, outcome in runs:
                 row = row_of(spec, outcome)
                 if results.append(row):
@@ -314,7 +337,7 @@ def main(argv=None):
         runs.close()
         results.close()
         print("benchmark: interrupted; %d of %d runs are in %s: --resume runs the rest"
-              % (len(results.rows), len(files) * args.repeat, results.path), file=sys.stderr)
+              % (len(results.rows), len(files) * args.repeat * len(profiles), results.path), file=sys.stderr)
         return 130
     except (ConnectionError, TimeoutError) as err:
         results.close()

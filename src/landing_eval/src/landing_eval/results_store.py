@@ -4,7 +4,7 @@ a row for a run already in the file is never written again."""
 import csv
 import os
 
-CSV_FIELDS = ("name", "run", "file", "vehicle", "path", "speed_mps", "wind_speed", "outcome", "expected", "passed",
+CSV_FIELDS = ("name", "run", "file", "vehicle", "path", "speed_mps", "wind_speed", "realism", "outcome", "expected", "passed",
               "touchdown_error_m", "time_to_land_s", "decisions", "emergency_position", "sim_time_s", "wall_time_s",
               "real_time_factor", "node", "error")
 _FLOATS = ("speed_mps", "wind_speed", "touchdown_error_m", "time_to_land_s", "sim_time_s", "wall_time_s",

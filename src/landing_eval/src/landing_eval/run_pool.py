@@ -87,7 +87,7 @@ def execute_run(spec):
     """One run of a scenario on this machine. ``spec``: ``python`` (interpreter of the workspace's venv),
     ``file`` (scenario path) and ``scenario_text`` (its YAML, written beside the run's output, so that a node
     need not have the file), ``out_dir``, ``log`` (path of the runner's output), ``wall_timeout`` (flight's
-    wall limit [s]) and ``env`` (environment overrides, or None). Returns ``{"returncode", "result",
+    wall limit [s]), ``realism`` (a profile replacing the scenario's, or None) and ``env`` (environment overrides, or None). Returns ``{"returncode", "result",
     "node", "failure"}``: ``result`` is result.json's content, or None with ``failure`` saying why."""
     python = spec["python"]
     if not os.access(python, os.X_OK):
@@ -102,6 +102,8 @@ def execute_run(spec):
             stream.write(spec["scenario_text"])
     command = [python, "-m", "landing_eval.runner_cli", scenario_path, "--out", out_dir,
                "--wall-timeout", str(spec["wall_timeout"])]
+    if spec.get("realism"):
+        command += ["--realism", spec["realism"]]
     env = dict(os.environ, **spec["env"]) if spec.get("env") else None
     outcome = {"returncode": None, "result": None, "node": node_name(), "failure": None}
     with open(spec["log"], "w") as log:
