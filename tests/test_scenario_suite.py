@@ -34,7 +34,10 @@ def test_stress_sets_are_the_readme_figures_and_stay_out_of_the_suite():
     sets = {name: [scenario.load(f) for f in benchmark.collect([os.path.join(stress, name)])]
             for name in sorted(os.listdir(stress))}
     assert {name: len(items) for name, items in sets.items()} == {"short_sweep": 8, "square_stop_and_go_3ms": 24,
-                                                                  "wind_5ms": 30}
+                                                                  "wind_5ms": 30, "realism_compare": 20}
+    compare = sets["realism_compare"]
+    assert {s["platform"]["path"] for s in compare} == set(scenario.PATHS)
+    assert {s["platform"]["speed_mps"] for s in compare if s["platform"]["vehicle"] == "car"} == {5.0, 10.0, 15.0}
     seeded = sets["square_stop_and_go_3ms"]
     assert sorted(s["seed"] for s in seeded) == sorted(list(range(1001, 1013)) * 2)
     assert {(s["platform"]["path"], s["platform"]["speed_mps"]) for s in seeded} == {("square", 3.0),
