@@ -188,6 +188,29 @@ def test_tracking_holds_the_nominal_height():
     assert f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30)).command.vz == 0.0
 
 
+def test_tracking_flies_the_cameras_view_centre_over_the_pad_while_the_pad_is_unseen():
+    """Tilted 18 deg (body z towards +x, as into a car's air stream), the camera looks 1.3 m behind the drone at
+    4 m: while the pad is unseen the command moves the drone forward of the predicted pad until the view is on
+    it; with the pad seen the drone itself goes above it."""
+    tilt = np.array([-math.tan(math.radians(18.0)), 0.0])  # view shift per metre of height
+
+    def tilted(t):
+        state = drone(height=4.0)
+        state.view_shift = tilt
+        return {"drone": state, "pad": pad(t)}
+    seen = tracking_flight()
+    seen.run(1.0, make=tilted)
+    assert abs(seen.out.command.vx) < 0.05  # above the pad: nothing to do
+    unseen = tracking_flight()
+    outs = unseen.run(1.0, make=tilted, vision_age=None)
+    assert unseen.state == State.TRACKING
+    assert outs[-1].command.vx > 0.5  # forward, yaw 0: towards where the camera sees the pad
+    assert outs[0].command.vx > 0.5  # never seen at all counts as unseen
+    late = tracking_flight(search_view_after=5.0)  # seen 1 s ago: within search_view_after, the drone above it
+    late.run(1.0, make=tilted, vision_age=1.0)
+    assert abs(late.out.command.vx) < 0.05
+
+
 def test_tracking_to_relocating_when_the_prediction_is_older_than_lost_timeout():
     f = tracking_flight()
     last = pad(f.t)
@@ -365,6 +388,23 @@ def test_touchdown_may_be_committed_while_still_descending_from_commit_height():
     g = landing_flight(height=P.commit_height + 0.2)
     g.run(1.0, make=fresh(x=0.02, height=P.commit_height + 0.2))
     assert not g.sm.committed
+
+
+def test_below_the_blend_over_a_fast_vehicle_an_older_detection_still_counts_for_the_gate():
+    """At the gate over a car at 15 m/s with the drone's flow locked on the pad's texture (weight 0.95) the
+    tilted camera has lost the pad's centre 0.5 s ago: the touchdown is committed all the same. Over the ground
+    (weight 0) or a slow vehicle the same detection age stops it (the drone climbs for a wider view)."""
+    height = P.gate_height
+    for weight, speed, commits in ((0.95, 15.0, True), (0.0, 15.0, False), (0.95, 2.0, False)):
+        f = landing_flight(height=height)
+
+        def riding(t, speed=speed):
+            return {"drone": drone(x=speed * t + 0.02, height=height, vx=speed),
+                    "pad": pad(t, x=speed * t, vx=speed)}
+        outs = f.run(P.gate_ready_time + 0.1, make=riding, flow_weight=weight, vision_age=0.5)
+        assert f.sm.committed == commits, (weight, speed)
+        if not commits:
+            assert outs[-1].command.vz > 0.0, (weight, speed)
 
 
 def test_ardrone_land_is_sent_at_land_height_during_the_final_descent():

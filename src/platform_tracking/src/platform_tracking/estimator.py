@@ -276,7 +276,9 @@ class DroneEstimator:
         self.orientations = collections.deque()  # (time, orientation) of the last second of IMU messages
         self.unseen_velocity = (None, np.zeros(2))  # (time, world xy) of the vehicle's velocity the flow did not see
         self.modelled_unseen = (None, np.zeros(2))  # ...as the weight's model has it (flow_surface.py)
-        self.flow_weight = 0.0           # how much the flow follows the vehicle (0 ground .. 1 vehicle), blended as it
+        self.flow_weight = 0.0           # how much the flow follows the vehicle (0 ground .. 1 vehicle): over a fast
+        #                                  vehicle as the accelerometer measures it, else the model's [-]
+        self.modelled_weight = 0.0       # the model's, blended in as the firmware blends each flow reading [-]
         self.flow_weight_spread = 0.0    # how much the weight changes within weight_position_std of the estimate [-]
         self.inertial = InertialVelocity(params.inertial_gain, params.inertial_reference_std) \
             if params.inertial_gain > 0.0 else None
@@ -414,6 +416,10 @@ class DroneEstimator:
             velocity = self.inertial.correct(t, seen + modelled, self.flow_weight_spread * speed)
             if self.inertial.fresh(t):
                 unseen = velocity - seen  # what the accelerometer says the flow did not see
+                if speed >= self.p.measured_weight_min_speed:
+                    # The weight the firmware's velocity follows, as measured: over a fast vehicle a model's
+                    # error of 0.1 is 1.5 m/s of command at 15 m/s; the measurement's noise is the flow's / speed.
+                    self.flow_weight = float(np.clip(unseen @ vehicle_velocity / speed ** 2, 0.0, 1.0))
         self.unseen_velocity = (t, unseen)
         return True
 
@@ -456,14 +462,21 @@ class DroneEstimator:
                     steps = self.p.weight_position_std * np.diag([1.0, 1.0, 0.25])
                     spread = max(abs(self.surface.weight(position + offset, orientation, pad_now, vehicle_velocity)
                                      - weight) for offset in np.vstack([steps, -steps]))
+        # Held, decaying over spread_hold_time: near the band the weight's model can flip between 0 and 1 from
+        # one position error to the next, and one step of full trust would pull in the whole error at once.
+        # The blended weight still moving towards the instantaneous one is as uncertain.
+        spread = max(spread, abs(self.modelled_weight - weight))
+        if last_t is not None and t > last_t:
+            spread = max(spread, self.flow_weight_spread * math.exp(-(t - last_t) / self.p.spread_hold_time))
         self.flow_weight_spread = spread
         if weight > 0.0:
             self.counters["flow_over_vehicle"] += 1
         if last_t is None or t <= last_t or self.surface is None:
-            self.flow_weight = weight
+            self.modelled_weight = self.flow_weight = weight
             return target
         blend = 1.0 - math.exp(-(t - last_t) / self.surface.p.flow_time_constant)
-        self.flow_weight += blend * (weight - self.flow_weight)
+        self.modelled_weight += blend * (weight - self.modelled_weight)
+        self.flow_weight = self.modelled_weight
         return last + blend * (target - last)
 
     def _orientation_at(self, t):

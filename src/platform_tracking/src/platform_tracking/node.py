@@ -31,6 +31,7 @@ unknown words) are dropped with a warning naming the topic and what was wrong, o
 problem every WARN_PERIOD (landing_msgs.input_check).
 """
 import collections
+import dataclasses
 import math
 import sys
 import threading
@@ -339,7 +340,11 @@ class TrackingNode:
         problem = odometry_problem(msg) or numbers_problem(1.5, orientation=(q.w, q.x, q.y, q.z))
         if problem:
             return self.rejections.reject("ardrone/odom_estimate", problem)
-        state = DroneState(np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]), yaw_from_quaternion(q.w, q.x, q.y, q.z))
+        # The camera looks along the body's -z: where that axis meets a level surface, per metre of height.
+        body_z = (2.0 * (q.x * q.z + q.w * q.y), 2.0 * (q.y * q.z - q.w * q.x), 1.0 - 2.0 * (q.x * q.x + q.y * q.y))
+        view_shift = -np.array(body_z[:2]) / body_z[2] if body_z[2] > 0.5 else None  # beyond 60 deg: no view
+        state = DroneState(np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]), yaw_from_quaternion(q.w, q.x, q.y, q.z),
+                           view_shift=view_shift)
         with self.lock:
             self.estimate = (stamp_of(msg), state)
 
@@ -459,7 +464,7 @@ class TrackingNode:
             drone = None
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
                 state = self.estimate[1]
-                drone = DroneState(state.position, state.velocity, state.yaw, self.sonar).moved(t - self.estimate[0])
+                drone = dataclasses.replace(state, sonar_height=self.sonar).moved(t - self.estimate[0])
             fresh = self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE
             # The weight when the command reaches the drone: a navdata old now, and a link's delay later.
             flow_weight = self.flow_weight.at(t + self.params.flow_weight_lead) if fresh else 0.0

@@ -80,6 +80,8 @@ class EstimatorParams:
     inertial_gain: float = spec(20.0, 0.0, 1000.0, "1/s")
     inertial_reference_std: float = spec(0.5, 0.001, 50.0, "m/s")
     weight_position_std: float = spec(0.1, 0.0, 5.0, "m")
+    measured_weight_min_speed: float = spec(4.0, 0.0, 100.0, "m/s")
+    spread_hold_time: float = spec(0.5, 0.001, 10.0, "s")
     altimeter_std: float = spec(0.1, 0.001, 50.0, "m")
     altitude_process_noise: float = spec(0.001, 0.0, 10.0, "m^2/s")
     sonar_std: float = spec(0.02, 0.001, 1.0, "m")
@@ -168,6 +170,7 @@ class TrackingParams:
     gate_ready_time: float = spec(0.2, 0.0, 10.0, "s")
     gate_timeout: float = spec(4.0, 0.1, 120.0, "s")
     vision_timeout: float = spec(0.3, 0.01, 10.0, "s")
+    search_view_after: float = spec(0.5, 0.0, 60.0, "s")
     gate_vision_age: float = spec(0.1, 0.0, 10.0, "s")
     gate_max_speed_change: float = spec(1.2, 0.0, 50.0, "m/s^2")
     gate_max_speed_change_change: float = spec(0.3, 0.0, 50.0, "m/s^2")
@@ -182,6 +185,7 @@ class TrackingParams:
     blend_weight_high: float = spec(0.9, 0.0, 1.0, "-")
     blend_min_pad_speed: float = spec(4.0, 0.0, 50.0, "m/s")
     blend_descent_rate: float = spec(0.8, 0.05, 3.0, "m/s")
+    locked_vision_age: float = spec(1.0, 0.0, 10.0, "s")
 
     def check(self, source="tracking parameters"):
         """Relations between parameters that a single range cannot express."""

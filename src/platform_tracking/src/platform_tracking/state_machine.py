@@ -103,6 +103,7 @@ class TrackingStateMachine:
         self.p = params.check()
         self.logger = logger or (lambda line: None)
         self.controller = TrackingController(params)
+        self._vision_age = None  # of the current step: since the latest detection [s]; None: never
         self._flow_weight = 0.0  # of the current step: how much the drone's own velocity follows the vehicle
         self.state = State.LANDED
         self.entered = 0.0                       # time the current state was entered
@@ -200,13 +201,24 @@ class TrackingStateMachine:
         return VelocityCommand(vx, vy, vz, 0.0)
 
     def _tracking_xy(self, t, drone, pad, accumulate=True):
+        if self._searching(t) and pad is not None and not self.committed:
+            # The pad not seen: the prediction (GPS alone, metres off after a while) may have the drone right
+            # above it while the tilted camera looks elsewhere. Aim the view, not the drone, at the pad.
+            drone = drone.viewing(self._height(drone, pad, t))
         return self.controller.world_velocity(t, drone, pad, accumulate=accumulate, flow_weight=self._flow_weight)
+
+    def _searching(self, t):
+        """True while the pad has not been seen for search_view_after (or ever), tracking or descending."""
+        age = self._vision_age
+        return (age is None or age > self.p.search_view_after) and self.state in (
+            State.TRACKING, State.LANDING, State.RELOCATING)
 
     # ----- the step ------------------------------------------------------------------------------
     def step(self, inputs: Inputs) -> Outputs:
         self._out = Outputs(state=self.state)
         t = inputs.time
         self._flow_weight = inputs.flow_weight
+        self._vision_age = inputs.vision_age
         if inputs.pad is not None:
             self.last_pad = inputs.pad
         if inputs.takeoff:
@@ -373,7 +385,7 @@ class TrackingStateMachine:
         self._out.error, self._out.height = distance, height
         # The prediction coasts through missed frames, but it cannot know that the vehicle brakes or turns
         # meanwhile: low down, only a pad seen right now is good enough to go lower.
-        seen = inp.vision_age is not None and inp.vision_age <= p.vision_timeout
+        seen = self._seen_within(inp, pad, t, p.vision_timeout)
         if not seen and not self.blind_since_logged:
             self._event("pad not seen for %s: %s" % (
                 "ever" if inp.vision_age is None else "%.2f s" % inp.vision_age,
@@ -388,7 +400,7 @@ class TrackingStateMachine:
         steady = abs(speed_change) <= p.gate_max_speed_change and \
             abs(pad.speed_change_at(t + descent_time) - speed_change) <= p.gate_max_speed_change_change
         on_target = distance < p.gate_error and relative_speed < p.gate_relative_speed and \
-            inp.vision_age is not None and inp.vision_age <= p.gate_vision_age
+            self._seen_within(inp, pad, t, p.gate_vision_age)
         in_gate = on_target and steady
         at_gate = height <= p.gate_height + 0.05
         # The touchdown may start from commit_height down, without stopping: already descending, the drone
@@ -442,6 +454,16 @@ class TrackingStateMachine:
             vz = 0.0  # outside the descent cone: hold the height, let the tracking catch up
         self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
 
+    def _seen_within(self, inp, pad, t, max_age):
+        """The pad seen at most ``max_age`` ago; over a fast vehicle whose texture the drone's flow follows alone
+        (weight above blend_weight_high) at most locked_vision_age ago: there the firmware holds the drone on the
+        pad by itself, while the camera, tilted into the air stream, loses the pad's centre before the gate."""
+        if inp.vision_age is None:
+            return False
+        locked = inp.flow_weight >= self.p.blend_weight_high and pad is not None and \
+            float(np.hypot(*pad.velocity[:2])) >= self.p.blend_min_pad_speed
+        return inp.vision_age <= (max(max_age, self.p.locked_vision_age) if locked else max_age)
+
     def _in_flow_blend(self, inp, pad, t):
         """The drone's flow follows the vehicle and the ground at once, over a fast vehicle."""
         return self.p.blend_weight_low < inp.flow_weight < self.p.blend_weight_high and \
@@ -470,7 +492,7 @@ class TrackingStateMachine:
         p, t = self.p, inp.time
         # The camera loses the pad's centre marker only in the last decimetres; unseen higher up, the pad has
         # left the narrow view (it brakes or turns while the prediction does not know yet).
-        unseen = inp.vision_age is None or inp.vision_age > p.gate_vision_age
+        unseen = not self._seen_within(inp, self.last_pad, t, p.gate_vision_age)
         reason = None
         if max(distance, distance_ahead) > p.commit_abort_error:
             reason = "error %.2f m (%.2f m in %.2f s) > commit_abort_error %.2f m during the final descent" % (
