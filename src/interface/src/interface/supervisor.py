@@ -508,6 +508,7 @@ class Supervisor:
         return True, "Flight Management opened: " + why
 
     def _ignored(self, t, word, why):
+        # The message starts with "ignored": the node takes a word repeated soon after as a stuck publisher.
         message = "ignored %r in mode %s: %s" % (word, self.mode.value, why)
         self._decide(t, "operator", None, "ignored", message, word)
         return False, message

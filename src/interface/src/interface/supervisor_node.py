@@ -258,16 +258,18 @@ class SupervisorNode:
 
     def _on_operator(self, msg):
         # An unknown word is garbage on the topic (a decision is for commands an operator gave), and so is a word
-        # repeated within REPEAT_S of the same word carried out (a publisher stuck in a loop): one decision for it
-        # is enough. A refused command may be given again at once (the operator retries once the cause is gone).
+        # repeated within REPEAT_S of the same word carried out or ignored as moot (a publisher stuck in a loop):
+        # one decision for it is enough. A command refused by a condition may be given again at once (the
+        # operator retries once the cause is gone).
         word, now = msg.data.strip().lower(), rospy.get_time()
         problem = choice_problem(word, OPERATOR_COMMANDS, "command")
         if not problem and self.last_command[0] == word and 0.0 <= now - self.last_command[1] < REPEAT_S:
             problem = ("repeated", "%r again %.2f s after the last one" % (word, now - self.last_command[1]))
         if problem:
             return self._dropped("operator/command", problem)
-        accepted, _ = self._command(msg.data)
-        self.last_command = (word, now) if accepted else (None, 0.0)
+        accepted, message = self._command(msg.data)
+        moot = message.startswith("ignored")  # SupervisorCore._ignored: the mode it asks for is already in force
+        self.last_command = (word, now) if accepted or moot else (None, 0.0)
 
     def _service(self, name):
         def handle(_request):
