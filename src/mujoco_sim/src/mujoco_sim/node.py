@@ -30,7 +30,7 @@ from .autopilot import FlightMode
 from .config import ConfigError
 from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
-from .simulator import Simulator
+from .simulator import SONAR_FIELD_OF_VIEW_RAD, Simulator
 
 NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF: Navdata.STATE_TAKING_OFF,
                  FlightMode.FLYING: Navdata.STATE_FLYING, FlightMode.LANDING: Navdata.STATE_LANDING,
@@ -426,7 +426,7 @@ class SimNode:
     def _sonar_message(self, stamp):
         s = self.cfg["sensors"]
         return Range(header=self._header(stamp, "ardrone/base_link"), radiation_type=Range.ULTRASOUND,
-                     field_of_view=0.35, min_range=s["sonar_min_range"], max_range=s["sonar_max_range"],
+                     field_of_view=SONAR_FIELD_OF_VIEW_RAD, min_range=s["sonar_min_range"], max_range=s["sonar_max_range"],
                      range=self.sim.sonar())
 
     def _publish_altimeter(self, stamp):
@@ -538,10 +538,13 @@ class SimNode:
 
 def _master_param(key):
     """``key``'s value on the master, or None. (rospy.get_param answers from rospy's cache once the key is
-    cached by get_param_cached, which may lag behind the master.)"""
+    cached by get_param_cached, which may lag behind the master.) None too when the master cannot be reached
+    (dead, or not answering on a loaded machine): the world goes on, the mirror waits for the next poll."""
     try:
         return rosgraph.Master(rospy.get_name()).getParam(key)
-    except rosgraph.MasterException:
+    except (rosgraph.MasterException, OSError) as err:
+        if isinstance(err, OSError):
+            rospy.logwarn_throttle(5.0, "mujoco_sim: the master did not answer for %s: %s" % (key, err))
         return None
 
 

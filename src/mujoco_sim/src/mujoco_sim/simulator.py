@@ -28,6 +28,8 @@ SURFACE_NAMES = {SURFACE_PAD: "pad", SURFACE_GROUND: "ground", SURFACE_VEHICLE: 
 # Optical frame (x right, y down, z forward) of the MuJoCo bottom camera, in the drone body frame.
 CAMERA_OPTICAL_IN_BODY = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 FOOT_CLEARANCE = 0.065  # base_link height above the surface the drone stands on [m]
+SONAR_FIELD_OF_VIEW_RAD = 0.35  # the beam published in sensor_msgs/Range (the AR.Drone's 40 kHz sonar, about 20 deg);
+#                                 the range itself is of the first surface along the body's -z axis
 DRONE_GEOM_GROUP = 3    # the drone's own geoms, hidden from its bottom camera (it cannot see them) unless they
                         # must cast their shadow
 # Random processes, each with its own generator derived from the seed (the first eight are the original ones).

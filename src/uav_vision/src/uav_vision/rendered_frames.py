@@ -20,7 +20,7 @@ import numpy as np
 from mujoco_sim.autopilot import quat_to_matrix
 from mujoco_sim.camera_model import image_motion
 from mujoco_sim.schema import load_sim_config
-from mujoco_sim.simulator import CAMERA_OPTICAL_IN_BODY, Simulator
+from mujoco_sim.simulator import CAMERA_OPTICAL_IN_BODY, SONAR_FIELD_OF_VIEW_RAD, Simulator
 
 SIM_PACKAGE = os.path.realpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "mujoco_sim"))
 CAMERA_BELOW_BASE = 0.035    # bottom camera origin below base_link [m] (docs/conventions.md)
@@ -261,7 +261,7 @@ class FrameRenderer:
             "tilt_deg": math.degrees(math.hypot(view.roll, view.pitch)),  # as drawn: direction and amount
             "sonar_range": sonars[1], "sonar_range_before": sonars[0], "sonar_range_after": sonars[2],
             # The beam the sonar's echoes come from, as sensor_msgs/Range field_of_view.
-            "sonar_field_of_view": 2.0 * math.radians(sim.realism["sonar_beam_half_angle_deg"]),
+            "sonar_field_of_view": SONAR_FIELD_OF_VIEW_RAD,
             "baro_altitude": altitude, "baro_altitude_m2": around[0], "baro_altitude_m1": around[1],
             "baro_altitude_p1": around[2], "baro_altitude_p2": around[3],
             "visible_pad_share": float(np.mean(pad_grid_visible)),
