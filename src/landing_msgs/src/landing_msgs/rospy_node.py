@@ -21,6 +21,7 @@ parameters and whose ``tick()`` runs at its rate:
   once the clock has stopped; here both wake up as soon as rospy shuts down.
 """
 import threading
+import warnings
 
 import rospy
 
@@ -43,6 +44,18 @@ def widen_accept_backlog(backlog=ACCEPT_BACKLOG):
     server = tcpros_base.init_tcpros_server()  # the node's server; created by init_node
     server.start_server()  # a no-op once started
     server.tcp_ros_server.server_sock.listen(backlog)
+
+
+def direct_publisher(topic, data_class, latch=False):
+    """A rospy.Publisher that writes each message to its subscribers' sockets in the publishing thread
+    (queue_size=None, without rospy's warning about it). For the small messages of the control loop: with a
+    queue_size rospy hands every message to a writer thread per connection and yields the CPU after each one
+    (QueuedConnection: time.sleep(0)), which cost more than the write itself and, on a loaded machine, delays
+    the message by a scheduler slice. A subscriber that stops reading blocks the publisher only once the
+    socket's buffer (hundreds of such messages) is full."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*queue_size.*")
+        return rospy.Publisher(topic, data_class, queue_size=None, latch=latch)
 
 
 def _after_shutdown_flag(callback):
