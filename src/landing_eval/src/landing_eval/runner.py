@@ -604,7 +604,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
 
     def step(name):
         steps[name] = round(time.monotonic() - wall_start, 3)
-    monitor, recorders = None, None
+    monitor, recorders, core, ros = None, None, None, None
     try:
         with contextlib.ExitStack() as stack:
             # The master in a process tree of its own: one roslaunch started would end the whole graph with it.
@@ -666,10 +666,11 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     except KeyboardInterrupt as err:
         result.update(outcome="aborted", error="interrupted (%s)" % (err or "Ctrl-C"), touchdown_error_m=None,
                       time_to_land_s=None, decisions=monitor.decisions if monitor else [])
-        step("processes_stopped")
         finish(result, out_dir, wall_start, phases, monitor, recorders, steps)
         raise
-    step("processes_stopped")
+    for name, process in (("recorder", recorders and recorders.current), ("launch", ros), ("master", core)):
+        if process is not None and process.exited_at is not None:
+            steps[name + "_exited"] = round(process.exited_at - wall_start, 3)
     return finish(result, out_dir, wall_start, phases, monitor, recorders, steps)
 
 
