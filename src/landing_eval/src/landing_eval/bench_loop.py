@@ -37,6 +37,21 @@ def node_cpu_per_sim_second(result):
             if name in first["nodes"] and first["nodes"][name]["pid"] == node["pid"]}
 
 
+def simulator_shares(bag):
+    """The simulator's own accounting at the end of the closed-loop run (the last /sim_stats in the bag): the shares
+    of its wall time spent in physics, rendering, publishing and waiting for the graph (lock-step), or {}."""
+    try:
+        import rosbag
+        with rosbag.Bag(bag) as recorded:
+            last = None
+            for _, msg, _ in recorded.read_messages(topics=["/sim_stats"]):
+                last = msg
+        stats = json.loads(last.data) if last is not None else {}
+    except Exception:  # no bag, or no stats in it: the figures are only missing
+        return {}
+    return {k[:-len("_share")]: v for k, v in stats.items() if k.endswith("_share")}
+
+
 class Profiler:
     """py-spy on every Python node of one run (found below the run's process by its ``__name:=``), from the
     moment it appears until it exits; each node's samples as collapsed stacks in DIR/profile/NODE.txt."""
@@ -132,6 +147,7 @@ def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False):
     return {"profile": profile, "sim_alone_rtf": alone.get("real_time_factor"), "render_share": alone.get("render_share"),
             "loop_rtf": result.get("real_time_factor"), "outcome": result.get("outcome"),
             "phases": result.get("wall_phases_s", {}), "cpu": node_cpu_per_sim_second(result), "hot": hot,
+            "steps": result.get("wall_steps_s", {}), "simulator": simulator_shares(result.get("bag") or ""),
             "error": result.get("error")}
 
 
@@ -144,6 +160,13 @@ def report(rows):
         print("| %s | %s | %s | %s | %s | %s | %s |" % (
             r["profile"], _f(r["sim_alone_rtf"]), _f(r["loop_rtf"]), _f(ratio), _f(r["phases"].get("start_up")),
             _f(r["phases"].get("shut_down")), r["outcome"]))
+    for r in rows:
+        if r.get("simulator"):
+            print("simulator's wall time in the closed loop, %s: %s" % (r["profile"], ", ".join(
+                "%s %.0f %%" % (k, 100 * v) for k, v in r["simulator"].items())))
+        if r.get("steps"):
+            print("start-up and shut-down steps, %s (wall s from the start): %s" % (r["profile"], ", ".join(
+                "%s %.2f" % (k, v) for k, v in r["steps"].items() if k not in ("flight", "clock_runs"))))
     base = next((r for r in rows if r["profile"] == "ideal" and r["loop_rtf"]), None)
     for r in rows:
         if base and r is not base and r["loop_rtf"]:
