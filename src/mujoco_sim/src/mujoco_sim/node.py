@@ -20,7 +20,7 @@ from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from landing_msgs.geometry import euler_from_quaternion
 from landing_msgs.input_check import RosRejectionLog
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
-from landing_msgs.rospy_node import init_node
+from landing_msgs.rospy_node import init_node, without_nagle
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
@@ -132,9 +132,11 @@ class SimNode:
 
     def _init_publishers(self):
         # Small messages are written synchronously: rospy's queued publishers hand every message to a
-        # writer thread per connection, and that hand-off costs more than the socket write itself.
+        # writer thread per connection, and that hand-off costs more than the socket write itself. None of them
+        # waits for Nagle's algorithm (without_nagle): rospy's and roscpp's own /clock subscriptions do not ask for
+        # TCP_NODELAY, and a tick then waited for the ACK of the one before (delayed by up to 40 ms).
         def pub(topic, kind, size=None, latch=False):
-            return rospy.Publisher(topic, kind, queue_size=size, latch=latch)
+            return without_nagle(rospy.Publisher(topic, kind, queue_size=size, latch=latch))
         self.pub_clock = pub("/clock", Clock)
         self.pub_image = pub("ardrone/bottom/image_raw", Image, 2)
         self.pub_info = pub("ardrone/bottom/camera_info", CameraInfo)
