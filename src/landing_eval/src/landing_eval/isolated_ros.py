@@ -170,15 +170,19 @@ class IsolatedProcess:
 class IsolatedLaunch(IsolatedProcess):
     """``roslaunch -p PORT`` of ``launch_args`` (package, file, arg:=value...) under its own master on a
     free port, so several runs can coexist. ``master_uri`` is what clients in this process must use (set
-    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``). With a master already running on ``port``
-    (IsolatedCore) roslaunch uses it rather than starting one of its own."""
+    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``). Given the ``port`` of a master (IsolatedCore),
+    roslaunch waits for that master (--wait: it may be started together with it, its imports and parsing then
+    overlap the master's start) and never starts one of its own."""
 
     def __init__(self, launch_args, log_path, port=None):
+        own_master = port is None
         self.port = port or free_port()
         # A node exits within about a second of SIGINT. One that hangs (rospy runs its shutdown inside the
         # signal handler and can deadlock on a lock the interrupted thread holds: the simulator did, 1 run
         # in 10, before it handled the signal itself) would cost roslaunch's default 15 s + 2 s.
-        command = ["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3", "--sigterm-timeout=1"]
+        # --skip-log-check: roslaunch would add up the size of ~/.ros/log at every start (0.1 s, more as it grows).
+        command = ["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3", "--sigterm-timeout=1",
+                   "--skip-log-check"] + ([] if own_master else ["--wait"])
         super().__init__(command + list(launch_args), log_path, "http://127.0.0.1:%d" % self.port)
 
     def wait_for_master(self, timeout=60.0):

@@ -16,6 +16,7 @@ import signal
 import subprocess
 import sys
 import time
+import uuid
 import xmlrpc.client
 
 from .isolated_ros import signal_on_parent_death
@@ -72,7 +73,12 @@ def main(argv=None):
     signal.signal(signal.SIGTERM, stop)
     master = _child(["rosmaster", "--core", "-p", str(port), "-w", "3"])
     children[master.pid] = master
-    if not wait_for_master("http://%s:%d/" % (os.environ.get("ROS_IP", "127.0.0.1"), port), master):
+    uri = "http://%s:%d/" % (os.environ.get("ROS_IP", "127.0.0.1"), port)
+    if wait_for_master(uri, master):
+        # roscore's run id: a `roslaunch --wait` (IsolatedLaunch against this master) waits for it.
+        xmlrpc.client.ServerProxy(uri).setParam("/ros_core", "/run_id", str(uuid.uuid1()))
+        print("ROS_MASTER_URI=%s" % uri, flush=True)  # (as roscore says it)
+    else:
         print("ros_core: the master did not answer on port %d within %.0f s" % (port, MASTER_WAIT_S), file=sys.stderr)
         stop()
     rosout_command = [rosout_executable(), "__name:=rosout"]

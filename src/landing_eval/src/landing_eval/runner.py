@@ -611,9 +611,10 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             core = stack.enter_context(IsolatedCore(os.path.join(out_dir, "core.log")))
             os.environ["ROS_MASTER_URI"] = core.master_uri
             start_deadline = wall_start + limits["start_up"]
+            # The launch starts beside the master and waits for it (roslaunch --wait).
+            ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(out_dir, "launch.log"), port=core.port))
             core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
             step("master")
-            ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(out_dir, "launch.log"), port=core.port))
             recorders = Recorders(out_dir, ros.master_uri, stack)
             monitor = FlightMonitor(s, ros, recorders, core)
             monitor.wait_for_graph(start_deadline)
@@ -655,6 +656,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
                 process.interrupt()
             step("flight")
             result.update(monitor.scored(error, aborted, sim_start, sim_time, phases["flight"]))
+            step("scored")
             if fuzzer is not None:
                 result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
             monitor.leave_graph()
