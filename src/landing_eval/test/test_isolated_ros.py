@@ -107,3 +107,33 @@ def test_a_subscriber_whose_first_attempt_failed_connects_once_sent_its_publishe
         for process in processes:
             process.terminate()
             process.wait(timeout=30)
+
+
+def _wait_until(condition, what, timeout=60.0):
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, what
+        time.sleep(0.05)
+
+
+def test_the_isolated_core_runs_master_and_rosout_survives_its_master_and_stops_on_sigint(tmp_path):
+    import os
+    import signal
+
+    import rosgraph
+    from landing_eval import processes
+    from landing_eval.isolated_ros import IsolatedCore
+    with IsolatedCore(str(tmp_path / "core.log")) as core:
+        core.wait_for_master(timeout=60.0)
+        master = rosgraph.Master("/test", master_uri=core.master_uri)
+        _wait_until(lambda: "/rosout" in dict(master.getSystemState()[1]).get("/rosout", []),
+                    "rosout did not subscribe to /rosout")
+        nodes = processes.nodes_below([core.process.pid])
+        assert set(nodes) == {"master", "rosout"}  # both in the core's process tree (faults find them there)
+        os.kill(nodes["master"], signal.SIGKILL)  # as the fault kill_node master does: rosout stays, the core too
+        _wait_until(lambda: "master" not in processes.nodes_below([core.process.pid]), "the master did not die")
+        assert core.alive() and "rosout" in processes.nodes_below([core.process.pid])
+        core.interrupt()
+        core.process.wait(timeout=30.0)  # (a bounded wait: SIGKILL after ros_core.STOP_WAIT_S)
+    assert core.process.returncode == 0
+    assert not any(os.path.exists("/proc/%d" % pid) and processes.usage(pid) for pid in nodes.values())

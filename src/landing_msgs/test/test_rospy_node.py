@@ -101,3 +101,37 @@ def test_run_node_turns_a_startup_error_into_a_fatal_message_and_exit_status_2(r
                             text=True, timeout=120)
     assert result.returncode == 2
     assert "parameter ~rate_hz is missing" in result.stdout + result.stderr
+
+
+DIRECT = """
+import socket, time
+import rospy
+from std_msgs.msg import String
+from landing_msgs.rospy_node import direct_publisher, init_node
+init_node("direct_talker")
+publisher = direct_publisher("chatter", String)
+assert publisher.impl.queue_size is None  # written in the publishing thread: no QueuedConnection
+deadline = time.monotonic() + 60
+while publisher.get_num_connections() == 0:
+    assert time.monotonic() < deadline, "no subscriber connected"
+    time.sleep(0.05)
+sock = publisher.impl.connections[0].socket
+print("nodelay %d" % sock.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY), flush=True)
+while not rospy.is_shutdown():
+    publisher.publish(String(data="hello"))
+    time.sleep(0.05)
+"""
+
+
+def test_a_direct_publisher_sends_without_nagle_to_a_subscriber_that_did_not_ask(ros_master):
+    _, env = ros_master
+    talker = subprocess.Popen([sys.executable, "-c", DIRECT], env=env, stdout=subprocess.PIPE, text=True,
+                              start_new_session=True)
+    # rostopic's subscription, like rospy's own /clock one, does not ask for TCP_NODELAY.
+    listener = subprocess.run(["rostopic", "echo", "-n", "1", "/chatter/data"], env=env, capture_output=True,
+                              text=True, timeout=120)
+    try:
+        assert listener.stdout.split()[0].strip('"') == "hello", listener.stdout + listener.stderr
+        assert talker.stdout.readline().strip() == "nodelay 1"
+    finally:
+        stop(talker)

@@ -11,7 +11,7 @@ import rospy
 from geometry_msgs.msg import Twist
 from landing_msgs.input_check import MAX_RATE_RADPS, MAX_SPEED_MPS, RosRejectionLog, numbers_problem
 from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import run_node, spin_at
+from landing_msgs.rospy_node import direct_publisher, run_node, spin_at
 from std_msgs.msg import String
 
 from .cmd_vel_mux import ALLOWED, CommandSelector
@@ -32,7 +32,7 @@ class MuxNode:
         self.selector = CommandSelector(_positive_param("input_timeout_s", 0.5))
         self.selected = None
         self.rejections = RosRejectionLog()
-        self.pub = rospy.Publisher("ardrone/cmd_vel", Twist, queue_size=1)
+        self.pub = direct_publisher("ardrone/cmd_vel", Twist)
         self.pub_selected = rospy.Publisher("cmd_vel_mux/selected", String, queue_size=1, latch=True)
         for name, topic in TOPICS.items():
             rospy.Subscriber(topic, Twist, self._input(name), queue_size=1)

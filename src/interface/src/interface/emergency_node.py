@@ -18,7 +18,7 @@ from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, RosRejecti
                                       frame_problem, numbers_problem, stamp_problem)
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
-from landing_msgs.rospy_node import run_node, spin_at
+from landing_msgs.rospy_node import direct_publisher, run_node, spin_at
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 from std_msgs.msg import Empty, String
@@ -55,7 +55,7 @@ class EmergencyNode:
         self.mode = None
         self.pending = []  # mode changes and acks, applied in the loop in arrival order
 
-        self.pub_cmd = rospy.Publisher("emergency/cmd_vel", Twist, queue_size=1)
+        self.pub_cmd = direct_publisher("emergency/cmd_vel", Twist)
         self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
         self.pub_position = rospy.Publisher("emergency/position", PositionXYCommand, queue_size=5)
         self.pub_state = rospy.Publisher("emergency/state", String, queue_size=1, latch=True)

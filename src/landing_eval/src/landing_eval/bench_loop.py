@@ -3,72 +3,153 @@
     rosrun landing_eval bench_loop scenarios/summit_circle_1ms.yaml --out DIR [--profiles ideal,realistic,harsh]
 
 For each profile, one after the other on this machine: the simulator alone at full speed with a camera
-subscriber (`bench_sim`), then the whole landing graph on the scenario (`run_scenario`), while the CPU
-time of every node is sampled from /proc. Prints each real-time factor, their ratio, the fixed
-per-scenario overhead (start-up and shut-down, from result.json's wall_phases_s) and the CPU per node;
-compare profiles only within one run of this command (machines and their load differ).
+subscriber (`bench_sim`), then the whole landing graph on the scenario (`run_scenario`), which samples the
+CPU time of each of its nodes from /proc. Prints each real-time factor, their ratio, the fixed
+per-scenario overhead (start-up and shut-down, from result.json's wall_phases_s) and the CPU seconds per sim
+second of each node (on a loaded machine this moves less than the wall-clock figures); with --profile,
+py-spy's hottest functions of each Python node. Compare profiles only within one run of this command
+(machines and their load differ).
 """
 import argparse
+import collections
 import json
 import os
+import re
 import subprocess
 import sys
 import threading
 import time
 
+from . import processes
+
 PROFILES = ("ideal", "realistic", "harsh")
 
 
-class NodeCpu(threading.Thread):
-    """Samples the CPU time of every ROS node process (a `__name:=` argument) until stopped; keeps the last."""
+def node_cpu_per_sim_second(result):
+    """{node: CPU seconds per sim second} over the flight, from result.json's resource samples (taken in the run's
+    own process tree: other runs on the machine, with the same node names, are not counted)."""
+    samples = (result.get("resources") or {}).get("samples") or []
+    if len(samples) < 2 or samples[-1]["sim_s"] <= samples[0]["sim_s"]:
+        return {}
+    first, last = samples[0], samples[-1]
+    sim = last["sim_s"] - first["sim_s"]
+    return {name: (node["cpu_s"] - first["nodes"][name]["cpu_s"]) / sim for name, node in last["nodes"].items()
+            if name in first["nodes"] and first["nodes"][name]["pid"] == node["pid"]}
 
-    def __init__(self, period=0.5):
-        super().__init__(daemon=True)
-        self.period, self.cpu, self.running = period, {}, True
 
-    def run(self):
+def simulator_shares(bag):
+    """The simulator's own accounting at the end of the closed-loop run (the last /sim_stats in the bag): the shares
+    of its wall time spent in physics, rendering, publishing and waiting for the graph (lock-step), or {}."""
+    try:
+        import rosbag
+        with rosbag.Bag(bag) as recorded:
+            last = None
+            for _, msg, _ in recorded.read_messages(topics=["/sim_stats"]):
+                last = msg
+        stats = json.loads(last.data) if last is not None else {}
+    except Exception:  # no bag, or no stats in it: the figures are only missing
+        return {}
+    return {k[:-len("_share")]: v for k, v in stats.items() if k.endswith("_share")}
+
+
+class Profiler:
+    """py-spy on every Python node of one run (found below the run's process by its ``__name:=``), from the
+    moment it appears until it exits; each node's samples as collapsed stacks in DIR/profile/NODE.txt."""
+
+    def __init__(self, root_pid, out_dir, rate_hz=100):
+        self.root_pid, self.dir, self.rate_hz = root_pid, os.path.join(out_dir, "profile"), rate_hz
+        self.spies, self.running = {}, True
+        self.py_spy = os.path.join(os.path.dirname(sys.executable), "py-spy")
+        self.thread = threading.Thread(target=self._attach, daemon=True)
+
+    def start(self):
+        if not os.path.isfile(self.py_spy):
+            print("bench_loop: %s is missing (make build installs it): no profile" % self.py_spy, file=sys.stderr)
+            return self
+        os.makedirs(self.dir, exist_ok=True)
+        self.thread.start()
+        return self
+
+    def _attach(self):
         while self.running:
-            for pid in os.listdir("/proc"):
-                if not pid.isdigit():
-                    continue
-                try:
-                    with open("/proc/%s/cmdline" % pid, "rb") as stream:
-                        args = stream.read().split(b"\0")
-                    with open("/proc/%s/stat" % pid) as stream:
-                        fields = stream.read().rsplit(")", 1)[1].split()
-                except OSError:
-                    continue
-                name = next((a[8:].decode() for a in args if a.startswith(b"__name:=")), None)
-                if name:
-                    self.cpu[name] = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-            time.sleep(self.period)
+            for name, pid in processes.nodes_below([self.root_pid]).items():
+                if name not in self.spies and _is_python(pid):
+                    self.spies[name] = subprocess.Popen(
+                        [self.py_spy, "record", "--pid", str(pid), "--rate", str(self.rate_hz), "--format", "raw",
+                         "--output", os.path.join(self.dir, name.strip("/") + ".txt")],
+                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
+            time.sleep(0.2)
 
-    def stop(self):
+    def stop(self, timeout=30.0):
+        """Waits for the profiles to be written (py-spy writes when its process ends)."""
         self.running = False
-        self.join(timeout=5.0)
+        if self.thread.is_alive():
+            self.thread.join(timeout=5.0)
+        for spy in self.spies.values():
+            try:
+                spy.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                spy.kill()
+                spy.wait()
+        return hot_functions(self.dir) if self.spies else {}
 
 
-def measure(scenario, out, profile, sim_seconds, timeout):
+def _is_python(pid):
+    return os.path.basename((processes.command_line(pid) or [""])[0]).startswith("python")
+
+
+def hot_functions(profile_dir, top=8):
+    """{node: [(share of its samples, function (file:line)), ...]} by own time (the innermost frame), busiest
+    first; idle frames (waits, sleeps, select) are counted as idle, not as functions."""
+    hot = {}
+    for entry in sorted(os.listdir(profile_dir)):
+        own, total = collections.Counter(), 0
+        with open(os.path.join(profile_dir, entry)) as stream:
+            for line in stream:
+                stack, _, count = line.rstrip().rpartition(" ")
+                if not count.isdigit() or not stack.strip():  # (a sample py-spy could not read)
+                    continue
+                frame = stack.split(";")[-1]
+                total += int(count)
+                own["(idle)" if IDLE.search(frame) else frame] += int(count)
+        hot[entry[:-4]] = [(n / total, frame) for frame, n in own.most_common(top)] if total else []
+    return hot
+
+
+IDLE = re.compile(r"^(wait|_wait_for_tstate_lock|sleep|select|poll|accept|recv_into|readinto|recv|_recv_loop|"
+                  r"spin|epoll)\b|threading.py|selectors.py|socket.py.*\breadinto")
+
+
+def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False):
     sim = subprocess.run(["rosrun", "landing_eval", "bench_sim", "--json", "--realism", profile,
                           "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
                          capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
     lines = [line for line in sim.stdout.splitlines() if line.startswith("{")]
     alone = json.loads(lines[-1]) if lines else {}
-    sampler = NodeCpu()
-    sampler.start()
     run_dir = os.path.join(out, profile)
-    loop = subprocess.run(["rosrun", "landing_eval", "run_scenario", scenario, "--out", run_dir, "--realism", profile,
-                           "--wall-timeout", str(timeout)], capture_output=True, text=True, timeout=timeout + 120,
-                          stdin=subprocess.DEVNULL)
-    sampler.stop()
+    os.makedirs(run_dir, exist_ok=True)
+    with open(os.path.join(run_dir, "run_scenario.log"), "w") as log:
+        loop = subprocess.Popen(["rosrun", "landing_eval", "run_scenario", scenario, "--out", run_dir, "--realism",
+                                 profile, "--wall-timeout", str(timeout)], stdout=log, stderr=subprocess.STDOUT,
+                                stdin=subprocess.DEVNULL)
+        profiler = Profiler(loop.pid, run_dir).start() if py_spy else None
+        try:
+            loop.wait(timeout=timeout + 300)
+        except subprocess.TimeoutExpired:
+            loop.kill()
+            loop.wait()
+        hot = profiler.stop() if profiler else {}
     try:
         with open(os.path.join(run_dir, "result.json")) as stream:
             result = json.load(stream)
     except (OSError, ValueError):
-        result = {"error": (loop.stdout + loop.stderr)[-500:]}
+        result = {"error": "no result.json; see %s" % os.path.join(run_dir, "run_scenario.log")}
     return {"profile": profile, "sim_alone_rtf": alone.get("real_time_factor"), "render_share": alone.get("render_share"),
             "loop_rtf": result.get("real_time_factor"), "outcome": result.get("outcome"),
-            "phases": result.get("wall_phases_s", {}), "cpu": sampler.cpu, "error": result.get("error")}
+            "phases": result.get("wall_phases_s", {}), "cpu": node_cpu_per_sim_second(result), "hot": hot,
+            "steps": result.get("wall_steps_s", {}), "simulator": simulator_shares(result.get("bag") or ""),
+            "error": result.get("error")}
+
 
 
 def report(rows):
@@ -79,21 +160,34 @@ def report(rows):
         print("| %s | %s | %s | %s | %s | %s | %s |" % (
             r["profile"], _f(r["sim_alone_rtf"]), _f(r["loop_rtf"]), _f(ratio), _f(r["phases"].get("start_up")),
             _f(r["phases"].get("shut_down")), r["outcome"]))
+    for r in rows:
+        if r.get("simulator"):
+            print("simulator's wall time in the closed loop, %s: %s" % (r["profile"], ", ".join(
+                "%s %.0f %%" % (k, 100 * v) for k, v in r["simulator"].items())))
+        if r.get("steps"):
+            print("start-up and shut-down steps, %s (wall s from the start): %s" % (r["profile"], ", ".join(
+                "%s %.2f" % (k, v) for k, v in r["steps"].items() if k not in ("flight", "clock_runs"))))
     base = next((r for r in rows if r["profile"] == "ideal" and r["loop_rtf"]), None)
     for r in rows:
         if base and r is not base and r["loop_rtf"]:
             print("closed loop RTF %s / ideal: %.2f (the realism's cost: %.0f %% of the ideal loop's speed)" % (
                 r["profile"], r["loop_rtf"] / base["loop_rtf"], 100 * (1 - r["loop_rtf"] / base["loop_rtf"])))
-    print("\nCPU seconds per node over the closed-loop run:")
+    print("\nCPU seconds per sim second per node over the flight (this run's processes only):")
     names = sorted({n for r in rows for n in r["cpu"]}, key=lambda n: -max(r["cpu"].get(n, 0) for r in rows))
     print("| node | " + " | ".join(r["profile"] for r in rows) + " |")
     print("|---|" + "---|" * len(rows))
     for name in names:
-        print("| %s | %s |" % (name, " | ".join(_f(r["cpu"].get(name)) for r in rows)))
+        print("| %s | %s |" % (name, " | ".join(_f(r["cpu"].get(name), 3) for r in rows)))
+    print("| all | %s |" % " | ".join(_f(sum(r["cpu"].values()) if r["cpu"] else None, 3) for r in rows))
+    for r in rows:
+        for node, functions in sorted(r.get("hot", {}).items()):
+            print("\npy-spy, %s, %s: own time by function (share of samples)" % (r["profile"], node))
+            for share, frame in functions:
+                print("  %5.1f %%  %s" % (100 * share, frame))
 
 
-def _f(value):
-    return "-" if value is None else "%.2f" % value
+def _f(value, digits=2):
+    return "-" if value is None else "%.*f" % (digits, value)
 
 
 def main(argv=None):
@@ -103,6 +197,8 @@ def main(argv=None):
     parser.add_argument("--profiles", default="ideal,realistic", help="comma-separated realism profiles")
     parser.add_argument("--sim-seconds", type=float, default=60.0, help="sim time of the simulator-alone run [s]")
     parser.add_argument("--timeout", type=float, default=900.0, help="wall-clock limit of each run [s]")
+    parser.add_argument("--profile", action="store_true", help="sample every Python node of the closed loop with "
+                        "py-spy (slows the run: its RTF is not comparable) and print each one's hottest functions")
     args = parser.parse_args(argv)
     profiles = [p for p in args.profiles.split(",") if p]
     unknown = [p for p in profiles if p not in PROFILES]
@@ -110,7 +206,7 @@ def main(argv=None):
         print("bench_loop: unknown profile(s) %s (known: %s)" % (", ".join(unknown), ", ".join(PROFILES)), file=sys.stderr)
         return 2
     os.makedirs(args.out, exist_ok=True)
-    rows = [measure(args.scenario, args.out, p, args.sim_seconds, args.timeout) for p in profiles]
+    rows = [measure(args.scenario, args.out, p, args.sim_seconds, args.timeout, args.profile) for p in profiles]
     with open(os.path.join(args.out, "bench_loop.json"), "w") as stream:
         json.dump(rows, stream, indent=2)
     report(rows)

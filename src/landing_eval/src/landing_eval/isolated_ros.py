@@ -7,6 +7,7 @@ import random
 import signal
 import socket
 import subprocess
+import sys
 import time
 import xmlrpc.client
 
@@ -134,6 +135,7 @@ class IsolatedProcess:
     def __init__(self, command, log_path, master_uri):
         self.command, self.log_path, self.master_uri = list(command), log_path, master_uri
         self.process, self.interrupted = None, False
+        self.exited_at = None  # time.monotonic() when leaving the context found the process ended
 
     def __enter__(self):
         env = loopback_environment(dict(os.environ, ROS_MASTER_URI=self.master_uri))
@@ -160,6 +162,7 @@ class IsolatedProcess:
             except subprocess.TimeoutExpired:
                 os.killpg(self.process.pid, signal.SIGKILL)
                 self.process.wait()
+        self.exited_at = time.monotonic()
         self._log.close()
         return False
 
@@ -167,15 +170,19 @@ class IsolatedProcess:
 class IsolatedLaunch(IsolatedProcess):
     """``roslaunch -p PORT`` of ``launch_args`` (package, file, arg:=value...) under its own master on a
     free port, so several runs can coexist. ``master_uri`` is what clients in this process must use (set
-    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``). With a master already running on ``port``
-    (IsolatedCore) roslaunch uses it rather than starting one of its own."""
+    ``os.environ['ROS_MASTER_URI']`` before ``rospy.init_node``). Given the ``port`` of a master (IsolatedCore),
+    roslaunch waits for that master (--wait: it may be started together with it, its imports and parsing then
+    overlap the master's start) and never starts one of its own."""
 
     def __init__(self, launch_args, log_path, port=None):
+        own_master = port is None
         self.port = port or free_port()
         # A node exits within about a second of SIGINT. One that hangs (rospy runs its shutdown inside the
         # signal handler and can deadlock on a lock the interrupted thread holds: the simulator did, 1 run
         # in 10, before it handled the signal itself) would cost roslaunch's default 15 s + 2 s.
-        command = ["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3", "--sigterm-timeout=1"]
+        # --skip-log-check: roslaunch would add up the size of ~/.ros/log at every start (0.1 s, more as it grows).
+        command = ["roslaunch", "-p", str(self.port), "--screen", "--sigint-timeout=3", "--sigterm-timeout=1",
+                   "--skip-log-check"] + ([] if own_master else ["--wait"])
         super().__init__(command + list(launch_args), log_path, "http://127.0.0.1:%d" % self.port)
 
     def wait_for_master(self, timeout=60.0):
@@ -194,10 +201,11 @@ class IsolatedLaunch(IsolatedProcess):
 
 
 class IsolatedCore(IsolatedLaunch):
-    """``roscore -p PORT`` on a free port: the master (and rosout) in a process tree of its own. A launch run
-    against it (IsolatedLaunch with the same port) then does not own the master: roslaunch ends its whole graph
-    when a master it started dies, whereas nodes whose master dies go on over their connections."""
+    """The master and rosout on a free port (landing_eval.ros_core: what ``roscore -p PORT`` starts, started
+    faster) in a process tree of its own. A launch run against it (IsolatedLaunch with the same port) then does
+    not own the master: roslaunch ends its whole graph when a master it started dies, whereas nodes whose master
+    dies go on over their connections."""
 
     def __init__(self, log_path, port=None):
         super().__init__([], log_path, port)
-        self.command = ["roscore", "-p", str(self.port)]
+        self.command = [sys.executable, "-m", "landing_eval.ros_core", str(self.port)]

@@ -600,20 +600,29 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
                           "values": s["realism"]["values"]},
               "wall_limits_s": limits}
     phases = {"start_up": None, "flight": 0.0}
-    monitor, recorders = None, None
+    steps = collections.OrderedDict()  # wall seconds from the start at which each step of start-up and shut-down ended
+
+    def step(name):
+        steps[name] = round(time.monotonic() - wall_start, 3)
+    monitor, recorders, core, ros = None, None, None, None
     try:
         with contextlib.ExitStack() as stack:
             # The master in a process tree of its own: one roslaunch started would end the whole graph with it.
             core = stack.enter_context(IsolatedCore(os.path.join(out_dir, "core.log")))
             os.environ["ROS_MASTER_URI"] = core.master_uri
             start_deadline = wall_start + limits["start_up"]
-            core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
+            # The launch starts beside the master and waits for it (roslaunch --wait).
             ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(out_dir, "launch.log"), port=core.port))
+            core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
+            step("master")
             recorders = Recorders(out_dir, ros.master_uri, stack)
             monitor = FlightMonitor(s, ros, recorders, core)
             monitor.wait_for_graph(start_deadline)
+            step("graph")
             monitor.wait_for_recorder(recorders.start(), start_deadline)
+            step("recorder")
             monitor.wait_for_connections(start_deadline)
+            step("connections")
             fuzzer = None
             if s["fuzz"]:
                 from . import fuzz
@@ -621,6 +630,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
                                                              os.path.join(out_dir, "fuzz.log"), ros.master_uri))
                 fuzz.wait_until_ready(out_dir, fuzzer, start_deadline)
             monitor.release(start_deadline)
+            step("clock_runs")
             sim_start = monitor.rospy.get_time()
             wall_flight_start = time.monotonic()
             phases["start_up"] = wall_flight_start - wall_start
@@ -644,10 +654,13 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             # (The master stops last, when the stack unwinds: nodes unregister from it as they stop.)
             for process in ([fuzzer] if fuzzer else []) + ([recorders.current] if recorders.current else []) + [ros]:
                 process.interrupt()
+            step("flight")
             result.update(monitor.scored(error, aborted, sim_start, sim_time, phases["flight"]))
+            step("scored")
             if fuzzer is not None:
                 result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
             monitor.leave_graph()
+            step("left_graph")
     except Exception as err:  # noqa: BLE001 (whatever went wrong, the run leaves its result and the reason)
         # The graph never came up (or the run could not even start): still a result, with the reason.
         result.update(outcome="aborted", error="%s: %s" % (type(err).__name__, err), touchdown_error_m=None,
@@ -655,12 +668,15 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     except KeyboardInterrupt as err:
         result.update(outcome="aborted", error="interrupted (%s)" % (err or "Ctrl-C"), touchdown_error_m=None,
                       time_to_land_s=None, decisions=monitor.decisions if monitor else [])
-        finish(result, out_dir, wall_start, phases, monitor, recorders)
+        finish(result, out_dir, wall_start, phases, monitor, recorders, steps)
         raise
-    return finish(result, out_dir, wall_start, phases, monitor, recorders)
+    for name, process in (("recorder", recorders and recorders.current), ("launch", ros), ("master", core)):
+        if process is not None and process.exited_at is not None:
+            steps[name + "_exited"] = round(process.exited_at - wall_start, 3)
+    return finish(result, out_dir, wall_start, phases, monitor, recorders, steps)
 
 
-def finish(result, out_dir, wall_start, phases, monitor, recorders):
+def finish(result, out_dir, wall_start, phases, monitor, recorders, steps=None):
     """Repair the bags, add the run's bookkeeping and write result.json."""
     bags = repair_bags(recorders.bags if recorders else [])
     result["bag"] = bags[0] if bags else None
@@ -679,6 +695,8 @@ def finish(result, out_dir, wall_start, phases, monitor, recorders):
     start_up = phases["start_up"] if phases["start_up"] is not None else result["wall_time_s"]
     result["wall_phases_s"] = {"start_up": round(start_up, 2), "flight": round(phases["flight"], 2),
                                "shut_down": round(result["wall_time_s"] - start_up - phases["flight"], 2)}
+    # When each step of start-up and shut-down ended (wall s from the start): where the fixed overhead goes.
+    result["wall_steps_s"] = dict(steps or {}, result=round(time.monotonic() - wall_start, 3))
     result.setdefault("sim_time_s", None)
     result.setdefault("real_time_factor", None)
     write_result(out_dir, result)

@@ -8,6 +8,7 @@ Outside the simulator nobody listens and the acknowledgements cost nothing (rosp
 import rospy
 
 from landing_msgs.msg import LockstepAck
+from landing_msgs.rospy_node import direct_publisher
 
 TOPIC = "lockstep_ack"
 CLOCK_INPUT = "/clock"
@@ -18,7 +19,7 @@ class LockstepAcker:
         self.msg = LockstepAck(node=rospy.get_name(),
                                input=rospy.resolve_name(input_topic) if input_topic else CLOCK_INPUT,
                                period=rospy.Duration.from_sec(period))
-        self.publisher = rospy.Publisher(TOPIC, LockstepAck, queue_size=10)
+        self.publisher = direct_publisher(TOPIC, LockstepAck)  # written at once: the simulator may be waiting for it
 
     def ack(self, stamp):
         """``stamp``: rospy.Time of the message processed (or of the timer step)."""

@@ -20,7 +20,9 @@ parameters and whose ``tick()`` runs at its rate:
 - Prompt exit: rospy.spin() looks for the shutdown every 0.5 s and a sleep on sim time every 0.3 s
   once the clock has stopped; here both wake up as soon as rospy shuts down.
 """
+import socket
 import threading
+import warnings
 
 import rospy
 
@@ -43,6 +45,42 @@ def widen_accept_backlog(backlog=ACCEPT_BACKLOG):
     server = tcpros_base.init_tcpros_server()  # the node's server; created by init_node
     server.start_server()  # a no-op once started
     server.tcp_ros_server.server_sock.listen(backlog)
+
+
+def direct_publisher(topic, data_class, latch=False):
+    """A rospy.Publisher that writes each message to its subscribers' sockets in the publishing thread
+    (queue_size=None, without rospy's warning about it). For the small messages of the control loop: with a
+    queue_size rospy hands every message to a writer thread per connection and yields the CPU after each one
+    (QueuedConnection: time.sleep(0)), which cost more than the write itself and, on a loaded machine, delays
+    the message by a scheduler slice. A subscriber that stops reading blocks the publisher only once the
+    socket's buffer (hundreds of such messages) is full. Sent without Nagle's algorithm (without_nagle)."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*queue_size.*")
+        return without_nagle(rospy.Publisher(topic, data_class, queue_size=None, latch=latch))
+
+
+class _NoDelayListener(rospy.SubscribeListener):
+    def __init__(self, publisher):
+        super().__init__()
+        self.publisher = publisher
+
+    def peer_subscribe(self, _topic, _publish, _publish_single):
+        for connection in list(self.publisher.impl.connections):
+            sock = getattr(connection, "socket", None)
+            if sock is not None:
+                try:
+                    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                except OSError:  # closed meanwhile
+                    pass
+
+
+def without_nagle(publisher):
+    """``publisher`` (a rospy.Publisher), with TCP_NODELAY on the socket of every subscriber that connects: each
+    message goes out at once. rospy sets it only when the subscriber asks (tcp_nodelay=True), and rospy's and
+    roscpp's own /clock subscriptions, and rosbag's, do not: small messages then waited for the ACK of the
+    previous one, which the receiver delays by up to 40 ms, and arrived in bursts. Returns ``publisher``."""
+    publisher.impl.add_subscriber_listener(_NoDelayListener(publisher))
+    return publisher
 
 
 def _after_shutdown_flag(callback):

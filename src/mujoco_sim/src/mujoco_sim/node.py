@@ -20,11 +20,12 @@ from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from landing_msgs.geometry import euler_from_quaternion
 from landing_msgs.input_check import RosRejectionLog
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
-from landing_msgs.rospy_node import init_node
+from landing_msgs.rospy_node import init_node, without_nagle
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
 from std_msgs.msg import Empty, String
+from tf2_msgs.msg import TFMessage
 
 from .autopilot import FlightMode
 from .config import ConfigError
@@ -131,12 +132,14 @@ class SimNode:
 
     def _init_publishers(self):
         # Small messages are written synchronously: rospy's queued publishers hand every message to a
-        # writer thread per connection, and that hand-off costs more than the socket write itself.
+        # writer thread per connection, and that hand-off costs more than the socket write itself. None of them
+        # waits for Nagle's algorithm (without_nagle): rospy's and roscpp's own /clock subscriptions do not ask for
+        # TCP_NODELAY, and a tick then waited for the ACK of the one before (delayed by up to 40 ms).
         def pub(topic, kind, size=None, latch=False):
-            return rospy.Publisher(topic, kind, queue_size=size, latch=latch)
+            return without_nagle(rospy.Publisher(topic, kind, queue_size=size, latch=latch))
         self.pub_clock = pub("/clock", Clock)
         self.pub_image = pub("ardrone/bottom/image_raw", Image, 2)
-        self.pub_info = pub("ardrone/bottom/camera_info", CameraInfo, 2)
+        self.pub_info = pub("ardrone/bottom/camera_info", CameraInfo)
         self.pub_imu = pub("ardrone/imu", Imu)
         self.pub_sonar = pub("ardrone/sonar_height", Range)
         self.pub_altimeter = pub("ardrone/altimeter", Altimeter)
@@ -151,7 +154,7 @@ class SimNode:
         self.pub_joints = pub("summit_xl/joint_states", JointState)
         self.pub_vehicle_gps = pub("summit_xl/gps/odom", Odometry)
         self.pub_stats = pub("sim_stats", String, 1, latch=True)
-        self.tf = tf2_ros.TransformBroadcaster()
+        self.pub_tf = pub("/tf", TFMessage)  # (tf2_ros.TransformBroadcaster's publisher is a queued one)
         self.static_tf = tf2_ros.StaticTransformBroadcaster()
         camera_position, _ = self.sim.camera_pose_in_body()
         pad_offset = self.sim.pad_offset_in_vehicle()
@@ -506,9 +509,9 @@ class SimNode:
     def _publish_tf(self, stamp):
         position, quat = self.sim.drone_pose()
         x, y, yaw = self.sim.vehicle_pose()
-        self.tf.sendTransform([
+        self.pub_tf.publish(TFMessage(transforms=[
             self._transform("world", "ardrone/base_link", position, quat, stamp),
-            self._transform("world", "summit_xl/base_link", (x, y, 0.0), _yaw_quaternion(yaw), stamp)])
+            self._transform("world", "summit_xl/base_link", (x, y, 0.0), _yaw_quaternion(yaw), stamp)]))
 
     def _publish_touchdown(self, touchdown):
         msg = Touchdown(header=self._header(rospy.Time.from_sec(touchdown.time), "world"), surface=touchdown.surface,

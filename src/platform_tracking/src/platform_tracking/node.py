@@ -44,7 +44,7 @@ from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
-from landing_msgs.rospy_node import init_node, spin
+from landing_msgs.rospy_node import direct_publisher, init_node, spin
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, String
@@ -130,8 +130,8 @@ class EstimatorNode:
         self.estimator = self._new_estimator()
         self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
         self.clock = 0.0  # the latest clock seen by _at
-        self.publisher = rospy.Publisher("ardrone/odom_estimate", Odometry, queue_size=10)
-        self.pub_unseen = rospy.Publisher("ardrone/flow_unseen_velocity", Vector3Stamped, queue_size=10)
+        self.publisher = direct_publisher("ardrone/odom_estimate", Odometry)
+        self.pub_unseen = direct_publisher("ardrone/flow_unseen_velocity", Vector3Stamped)
         self.lockstep = LockstepAcker("ardrone/imu")
         # tcp_nodelay throughout the control loop: Nagle's algorithm would deliver sensor messages in bursts.
         rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=20, tcp_nodelay=True)
@@ -315,11 +315,11 @@ class TrackingNode:
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
-        self.pub_cmd = rospy.Publisher("ardrone/cmd_vel", Twist, queue_size=1)
+        self.pub_cmd = direct_publisher("ardrone/cmd_vel", Twist)
         self.pub_takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
         self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
         self.pub_state = rospy.Publisher("platform_tracking/state", String, queue_size=1, latch=True)
-        self.pub_target = rospy.Publisher("platform_tracking/target", PointStamped, queue_size=1)
+        self.pub_target = direct_publisher("platform_tracking/target", PointStamped)
         rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("kalman_prediction_path", Path, self.on_path, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5, tcp_nodelay=True)

@@ -8,7 +8,7 @@ import sys
 import rospy
 from geometry_msgs.msg import Twist
 from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import init_node
+from landing_msgs.rospy_node import direct_publisher, init_node
 from std_msgs.msg import Empty
 
 from .paths import Path, PathError
@@ -30,7 +30,7 @@ def main():
         sys.exit(2)
     rate_hz, start_delay = float(_required("~rate_hz")), float(_required("~start_delay"))
     wait_for_takeoff = bool(_required("~start_on_takeoff"))
-    publisher = rospy.Publisher("summit_xl_control/cmd_vel", Twist, queue_size=1)
+    publisher = direct_publisher("summit_xl_control/cmd_vel", Twist)
     started = {"flag": not wait_for_takeoff}
     launch_id = rospy.get_param("~launch_id", None)
     saved = rospy.get_param("~started_at", None)
