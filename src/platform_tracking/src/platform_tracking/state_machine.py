@@ -201,13 +201,13 @@ class TrackingStateMachine:
         return VelocityCommand(vx, vy, vz, 0.0)
 
     def _tracking_xy(self, t, drone, pad, accumulate=True):
-        if self._searching(t) and pad is not None and not self.committed:
+        if self._searching() and pad is not None and not self.committed:
             # The pad not seen: the prediction (GPS alone, metres off after a while) may have the drone right
             # above it while the tilted camera looks elsewhere. Aim the view, not the drone, at the pad.
             drone = drone.viewing(self._height(drone, pad, t))
         return self.controller.world_velocity(t, drone, pad, accumulate=accumulate, flow_weight=self._flow_weight)
 
-    def _searching(self, t):
+    def _searching(self):
         """True while the pad has not been seen for search_view_after (or ever), tracking or descending."""
         age = self._vision_age
         return (age is None or age > self.p.search_view_after) and self.state in (
@@ -385,7 +385,7 @@ class TrackingStateMachine:
         self._out.error, self._out.height = distance, height
         # The prediction coasts through missed frames, but it cannot know that the vehicle brakes or turns
         # meanwhile: low down, only a pad seen right now is good enough to go lower.
-        seen = self._seen_within(inp, pad, t, p.vision_timeout)
+        seen = self._seen_within(inp, pad, p.vision_timeout)
         if not seen and not self.blind_since_logged:
             self._event("pad not seen for %s: %s" % (
                 "ever" if inp.vision_age is None else "%.2f s" % inp.vision_age,
@@ -400,7 +400,7 @@ class TrackingStateMachine:
         steady = abs(speed_change) <= p.gate_max_speed_change and \
             abs(pad.speed_change_at(t + descent_time) - speed_change) <= p.gate_max_speed_change_change
         on_target = distance < p.gate_error and relative_speed < p.gate_relative_speed and \
-            self._seen_within(inp, pad, t, p.gate_vision_age)
+            self._seen_within(inp, pad, p.gate_vision_age)
         in_gate = on_target and steady
         at_gate = height <= p.gate_height + 0.05
         # The touchdown may start from commit_height down, without stopping: already descending, the drone
@@ -454,7 +454,7 @@ class TrackingStateMachine:
             vz = 0.0  # outside the descent cone: hold the height, let the tracking catch up
         self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
 
-    def _seen_within(self, inp, pad, t, max_age):
+    def _seen_within(self, inp, pad, max_age):
         """The pad seen at most ``max_age`` ago; over a fast vehicle whose texture the drone's flow follows alone
         (weight above blend_weight_high) at most locked_vision_age ago: there the firmware holds the drone on the
         pad by itself, while the camera, tilted into the air stream, loses the pad's centre before the gate."""
@@ -492,7 +492,7 @@ class TrackingStateMachine:
         p, t = self.p, inp.time
         # The camera loses the pad's centre marker only in the last decimetres; unseen higher up, the pad has
         # left the narrow view (it brakes or turns while the prediction does not know yet).
-        unseen = not self._seen_within(inp, self.last_pad, t, p.gate_vision_age)
+        unseen = not self._seen_within(inp, self.last_pad, p.gate_vision_age)
         reason = None
         if max(distance, distance_ahead) > p.commit_abort_error:
             reason = "error %.2f m (%.2f m in %.2f s) > commit_abort_error %.2f m during the final descent" % (
