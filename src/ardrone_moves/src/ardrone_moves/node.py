@@ -42,14 +42,16 @@ def _required(node, name, kind, yaml_name):
 
 
 class DroneCommands:
-    """The outputs shared by the joystick and the keyboard."""
+    """The outputs of a manual control, shared by the joystick, the keyboard and the operator UIs (console, web
+    station: their ``ardrone/cmd_vel`` is remapped behind cmd_vel_mux in start.launch). ``operator``: the UI's
+    own operator/command publisher, else one of its own."""
 
-    def __init__(self, node):
+    def __init__(self, node, operator=None):
         self.node = node
         self.cmd_vel = rospy.Publisher("ardrone/cmd_vel", Twist, queue_size=1)
         self.takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
         self.land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
-        self.operator = rospy.Publisher("operator/command", String, queue_size=10)
+        self.operator = operator or rospy.Publisher("operator/command", String, queue_size=10)
 
     def send(self, command):
         msg = Twist()

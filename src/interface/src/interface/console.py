@@ -108,8 +108,8 @@ class ConsoleNode:
                          lambda m: self._set(target_xy=(m.point.x, m.point.y)), queue_size=1)
         rospy.Subscriber("ardrone/sonar_height", Range, lambda m: self._set(height=m.range), queue_size=1)
         if teleop is not None:
-            from .manual_outputs import ManualOutputs
-            self.drone_commands = ManualOutputs(self.publisher)
+            from ardrone_moves.node import DroneCommands
+            self.drone_commands = DroneCommands("console", self.publisher)
 
     def _set(self, **values):
         with self.lock:

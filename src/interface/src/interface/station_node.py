@@ -19,6 +19,7 @@ import threading
 import time
 
 import rospy
+from ardrone_moves.node import DroneCommands
 from geometry_msgs.msg import PointStamped
 from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
@@ -32,7 +33,6 @@ from std_msgs.msg import String
 from .conditions import ConditionTableError, load_table
 from .console import SENSOR_TOPICS, SENSOR_TIMEOUT_S
 from .console_model import PANEL, ConsoleModel, panel_keys
-from .manual_outputs import ManualOutputs
 from .station_auth import Access
 from .station_manual import ManualControl
 from .station_model import StationModel, translate_odometry, translate_path, translate_point
@@ -181,7 +181,7 @@ class StationNode:
         self.controls = {}   # page id -> ManualControl
         self.camera = Camera("camera", p["camera_fps"], p["jpeg_quality"])
         self.operator = rospy.Publisher("operator/command", String, queue_size=10)
-        self.outputs = ManualOutputs(self.operator)
+        self.outputs = DroneCommands("station", self.operator)
         self.loop, self.stopping = None, None
 
         def setter(**fields):
