@@ -322,13 +322,19 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
     ROS_WARN_THROTTLE(period, "%s: dropped a frame cv_bridge cannot read: %s", topic, e.what());
     return;
   }
-  const PadObservation observation =
-      localizer_.observe(image->image, order, *intrinsics_, *attitude, sonar, altitude, sonar_half_angle_);
-  if (observation.found)
-    publish(msg->header, observation);
-  else
-    ROS_DEBUG_THROTTLE(1.0, "no pad: %s", observation.reason.c_str());
-  if (debug_pub_.getNumSubscribers() > 0) publishDebugImage(msg, image->image, observation, *intrinsics_);
+  // Inputs that pass every check may still be ones OpenCV refuses (a lens or an image no camera makes): the
+  // frame is dropped with the reason, the node goes on (an exception out of a callback would abort it).
+  try {
+    const PadObservation observation =
+        localizer_.observe(image->image, order, *intrinsics_, *attitude, sonar, altitude, sonar_half_angle_);
+    if (observation.found)
+      publish(msg->header, observation);
+    else
+      ROS_DEBUG_THROTTLE(1.0, "no pad: %s", observation.reason.c_str());
+    if (debug_pub_.getNumSubscribers() > 0) publishDebugImage(msg, image->image, observation, *intrinsics_);
+  } catch (const std::exception& e) {
+    ROS_WARN_THROTTLE(period, "%s: dropped a frame the detector could not process: %s", topic, e.what());
+  }
 }
 
 void PlatformDetectionRos::publish(const std_msgs::Header& image_header, const PadObservation& observation) {
