@@ -44,8 +44,11 @@ def test_the_next_mission_cycles_the_conditions_and_swaps_a_low_battery():
 
 
 def test_the_nodes_of_a_process_tree_are_found_by_their_ros_names_with_memory_and_cpu():
-    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "__name:=fake_node"])
+    # The child says when its interpreter is up: measured before that, it is a bare exec'd process of < 1 MB.
+    child = subprocess.Popen([sys.executable, "-c", "import time; print('up', flush=True); time.sleep(60)",
+                              "__name:=fake_node"], stdout=subprocess.PIPE)
     try:
+        assert child.stdout.readline() == b"up\n"  # ends at the line or at EOF if the child died
         deadline = time.monotonic() + 10
         while "fake_node" not in processes.nodes_below([os.getpid()]):
             assert time.monotonic() < deadline
