@@ -40,8 +40,10 @@ def scenario_file(tmp_path, base, **changes):
 
 def test_three_missions_in_a_row_land_on_the_pad_with_flat_memory_and_loopback_only(tmp_path):
     out = tmp_path / "soak"
+    # A bag per 30 s of sim time, as the long soak records (rosbag's index memory is freed at each new bag).
     run = subprocess.run(["rosrun", "landing_eval", "soak", "--scenario", os.path.join(RELIABILITY, "soak_3_missions.yaml"),
-                          "--out", str(out)], capture_output=True, text=True, timeout=TIMEOUT_S, stdin=subprocess.DEVNULL)
+                          "--out", str(out), "--bag-split-s", "30"], capture_output=True, text=True, timeout=TIMEOUT_S,
+                         stdin=subprocess.DEVNULL)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     result = json.loads((out / "result.json").read_text())
     missions = result["missions"]
@@ -54,6 +56,13 @@ def test_three_missions_in_a_row_land_on_the_pad_with_flat_memory_and_loopback_o
             "supervisor", "emergency", "cmd_vel_mux", "summit_moves", "flight_recorder", "master"} <= set(table)
     assert all(row["rss_growth_pct"] < 10.0 for row in table.values()), table
     assert "| 3 | control_battery 70" in (out / "soak.md").read_text()
+    # The bags follow one another without a gap and hold the whole session.
+    bags = result["bags"]
+    assert [os.path.basename(b) for b in bags] == ["flight_%d.bag" % i for i in range(len(bags))] and len(bags) >= 3
+    parts = [read_bag(bag, ["/ardrone/navdata"]) for bag in bags]
+    assert all(0.0 <= later.start_s - earlier.end_s < 0.5 for earlier, later in zip(parts, parts[1:])), \
+        [(p.start_s, p.end_s) for p in parts]
+    assert parts[-1].end_s >= result["sim_time_s"] - 2.0
     # Security: every process of the graph listens on loopback only (env.sh's and run_scenario's default).
     listening = result["listening"]
     assert set(listening) >= set(table) and all(listening.values())

@@ -109,6 +109,9 @@ def soak_main(argv=None):
     parser.add_argument("--out", required=True, help="output directory (result.json, bag, soak.md, soak.json)")
     parser.add_argument("--realism", choices=("ideal", "realistic", "harsh"), default=None,
                         help="realism profile (default: the scenario's)")
+    parser.add_argument("--bag-split-s", type=float, default=None,
+                        help="a new bag every this many seconds of sim time (default: %d for a run over %.0f s, "
+                             "else one bag)" % (runner.RECORDER_SPLIT_S, runner.LONG_RUN_S))
     args = parser.parse_args(argv)
 
     def change(data):
@@ -119,7 +122,7 @@ def soak_main(argv=None):
                                                     args.missions * (pause + 90.0)))
     try:
         path = _scenario_copy(args.scenario, args.out, change)
-        result = runner.run(path, args.out, realism=args.realism)
+        result = runner.run(path, args.out, realism=args.realism, split_s=args.bag_split_s)
     except (scenario_mod.ScenarioError, OSError, KeyError) as err:
         print("soak: %s" % err, file=sys.stderr)
         return 2

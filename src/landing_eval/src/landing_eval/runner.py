@@ -10,6 +10,7 @@ import argparse
 import collections
 import contextlib
 import faulthandler
+import glob
 import json
 import os
 import signal
@@ -33,6 +34,10 @@ SHUT_DOWN_WALL_S = 60.0         # stopping the recorder and the launch (20 s eac
 CLOCK_STALL_WALL_S = 30.0       # the sim clock standing still this long after the start: the simulator is gone [s]
 MODE_WAIT_S = 30.0              # sim seconds a next mission waits for the supervisor to be back on the ground
 RECORDER = "flight_recorder"
+# A run whose time limit is over LONG_RUN_S records a bag per RECORDER_SPLIT_S of sim time: rosbag record holds
+# its whole bag's index in memory (about 1 MB a minute of flight) and frees it only when it starts the next bag [s].
+LONG_RUN_S = 600.0
+RECORDER_SPLIT_S = 120
 
 
 def wall_limits(time_limit_s, flight_wall_s=None):
@@ -69,15 +74,29 @@ def launch_arguments(s):
     return ["%s:=%s" % (k, v) for k, v in args.items()]
 
 
-def recorder_command(bag):
+def recorder_command(bag, split_s=0):
     """rosbag record of the topics interface/record.launch records (its record_regex, in its chunk_kb chunks),
-    started directly: through a second roslaunch it took 0.4 s longer to start and to stop."""
+    started directly: through a second roslaunch it took 0.4 s longer to start and to stop. With ``split_s`` > 0
+    a new bag every split_s seconds of sim time (NAME_0.bag, NAME_1.bag, ...; see split_bags)."""
     import xml.etree.ElementTree as ElementTree
     import rospkg
     launch = os.path.join(rospkg.RosPack().get_path("interface"), "launch", "record.launch")
     defaults = {arg.get("name"): arg.get("default") for arg in ElementTree.parse(launch).getroot().iter("arg")}
-    return ["rosrun", "rosbag", "record", "--output-name=" + bag, "--lz4", "--chunksize=" + defaults["chunk_kb"],
-            "-e", defaults["record_regex"], "__name:=" + RECORDER]
+    split = ["--split", "--duration=%d" % split_s] if split_s > 0 else []
+    return ["rosrun", "rosbag", "record", "--output-name=" + bag] + split + [
+        "--lz4", "--chunksize=" + defaults["chunk_kb"], "-e", defaults["record_regex"], "__name:=" + RECORDER]
+
+
+def split_bags(bag):
+    """The bags rosbag record --split wrote for ``--output-name=bag``, in order (NAME_0.bag, NAME_1.bag, ...;
+    the last one still NAME_N.bag.active if its recorder was killed), as the names they have once repaired."""
+    stem = bag[:-len(".bag")]
+    found = {}
+    for path in glob.glob(glob.escape(stem) + "_*.bag") + glob.glob(glob.escape(stem) + "_*.bag.active"):
+        number = path[len(stem) + 1:].split(".bag", 1)[0]
+        if number.isdigit():
+            found[int(number)] = "%s_%s.bag" % (stem, number)
+    return [found[k] for k in sorted(found)]
 
 
 def only_from(node, callback):
@@ -104,17 +123,22 @@ class EventSchedule:
 class Recorders:
     """The flight recorder (rosbag record) and, after it died, its successors (flight.2.bag, ...)."""
 
-    def __init__(self, out_dir, master_uri, stack):
-        self.out_dir, self.master_uri, self.stack = out_dir, master_uri, stack
+    def __init__(self, out_dir, master_uri, stack, split_s=0):
+        self.out_dir, self.master_uri, self.stack, self.split_s = out_dir, master_uri, stack, split_s
         self.bags, self.current = [], None
 
     def start(self):
         index = len(self.bags) + 1
         bag = os.path.abspath(os.path.join(self.out_dir, "flight.bag" if index == 1 else "flight.%d.bag" % index))
         log = os.path.join(self.out_dir, "recorder.log" if index == 1 else "recorder.%d.log" % index)
-        self.current = self.stack.enter_context(IsolatedProcess(recorder_command(bag), log, self.master_uri))
+        self.current = self.stack.enter_context(IsolatedProcess(recorder_command(bag, self.split_s), log,
+                                                                self.master_uri))
         self.bags.append(bag)
         return self.current
+
+    def written(self):
+        """Every bag written so far, in order (each recorder's splits in turn)."""
+        return [part for bag in self.bags for part in (split_bags(bag) if self.split_s > 0 else [bag])]
 
     def pids(self):
         return [self.current.process.pid] if self.current is not None and self.current.process else []
@@ -578,9 +602,11 @@ def repair_bags(bags, timeout=30.0):
     return repaired
 
 
-def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None):
+def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None, split_s=None):
     """Run one scenario (in the realism profile ``realism`` if given, else the scenario's); returns the
-    result dict (also written to out_dir/result.json, whatever happens after the scenario file was read)."""
+    result dict (also written to out_dir/result.json, whatever happens after the scenario file was read).
+    ``split_s``: a new bag every split_s seconds of sim time (0: one bag; None: RECORDER_SPLIT_S for a run
+    whose time limit is over LONG_RUN_S)."""
     s = scenario_mod.load(scenario_path, realism)
     s["_needs_tracker"] = landing_stack
     s["_supervisor"] = supervisor and landing_stack
@@ -615,7 +641,9 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(out_dir, "launch.log"), port=core.port))
             core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
             step("master")
-            recorders = Recorders(out_dir, ros.master_uri, stack)
+            if split_s is None:
+                split_s = RECORDER_SPLIT_S if s["time_limit_s"] > LONG_RUN_S else 0
+            recorders = Recorders(out_dir, ros.master_uri, stack, split_s)
             monitor = FlightMonitor(s, ros, recorders, core)
             monitor.wait_for_graph(start_deadline)
             step("graph")
@@ -678,7 +706,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
 
 def finish(result, out_dir, wall_start, phases, monitor, recorders, steps=None):
     """Repair the bags, add the run's bookkeeping and write result.json."""
-    bags = repair_bags(recorders.bags if recorders else [])
+    bags = repair_bags(recorders.written() if recorders else [])
     result["bag"] = bags[0] if bags else None
     if len(bags) > 1:
         result["bags"] = bags
