@@ -248,3 +248,15 @@ def test_a_drone_state_is_moved_to_the_time_it_is_compared_at():
     assert later.position == pytest.approx([1.5, 1.75, 3.025])
     assert later.velocity is state.velocity and later.yaw == 0.3 and later.sonar_height == 1.0
     assert state.position == pytest.approx([1.0, 2.0, 3.0])  # the original is left alone
+
+
+def test_a_state_from_an_attitude_has_its_yaw_and_sees_ahead_of_itself_when_pitched_nose_down():
+    level = DroneState.from_attitude((1.0, 2.0, 4.0), (0.5, 0.0, 0.0), (math.cos(0.5), 0.0, 0.0, math.sin(0.5)))
+    assert level.yaw == pytest.approx(1.0) and np.allclose(level.view_shift, 0.0)
+    assert np.allclose(level.viewing(4.0).position, level.position)
+    # Pitched 18 deg nose down (about body y) with yaw 0: the camera looks 4 * tan(18 deg) = 1.3 m behind.
+    pitch = math.radians(18.0)
+    leaning = DroneState.from_attitude((0.0, 0.0, 4.0), (10.0, 0.0, 0.0), (math.cos(pitch / 2), 0.0, math.sin(pitch / 2), 0.0))
+    assert leaning.viewing(4.0).position[0] == pytest.approx(-4.0 * math.tan(pitch))
+    upside_down = DroneState.from_attitude((0.0, 0.0, 4.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0))
+    assert upside_down.view_shift is None

@@ -34,6 +34,7 @@ import dataclasses
 from typing import Optional, Sequence
 
 import numpy as np
+from landing_msgs.geometry import yaw_from_quaternion
 
 from .estimator import world_to_heading
 from .params import TrackingParams
@@ -59,6 +60,16 @@ class DroneState:
     # Where the bottom camera's axis meets a level surface, relative to the drone, per metre of height below
     # it (world x, y) [m/m]: the drone's tilt. None: straight down.
     view_shift: Optional[np.ndarray] = None
+
+    @classmethod
+    def from_attitude(cls, position, velocity, quaternion, sonar_height=None):
+        """The state of an estimate whose attitude is the unit quaternion (w, x, y, z): its yaw, and its view
+        shift from where the camera axis (the body's -z) meets a level surface; tilted beyond 60 deg, no view."""
+        w, x, y, z = quaternion
+        body_z = (2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y))
+        view_shift = -np.array(body_z[:2]) / body_z[2] if body_z[2] > 0.5 else None
+        return cls(np.asarray(position, dtype=float), np.asarray(velocity, dtype=float),
+                   yaw_from_quaternion(w, x, y, z), sonar_height, view_shift)
 
     def viewing(self, height):
         """The state placed where the camera looks at ``height`` [m] below: flying that over the pad puts the

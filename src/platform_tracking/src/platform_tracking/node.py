@@ -39,7 +39,6 @@ import threading
 import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped, Twist, Vector3Stamped
-from landing_msgs.geometry import yaw_from_quaternion
 from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
 from landing_msgs.lockstep import LockstepAcker
@@ -111,6 +110,16 @@ def stamp_of(msg):
     return stamp if stamp > 0.0 else rospy.get_time()
 
 
+def pad_odometry(msg, rejections):
+    """(stamp, position, velocity) of the Kalman filter's pad odometry, or None after logging why it was dropped."""
+    problem = odometry_problem(msg)
+    if problem:
+        rejections.reject("kalman_platform_odom", problem)
+        return None
+    p, v = msg.pose.pose.position, msg.twist.twist.linear
+    return stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z)
+
+
 def wait_for_clock():
     while not rospy.is_shutdown() and rospy.get_time() == 0.0:
         rospy.sleep(0.01)  # under /use_sim_time, time is 0 until the first /clock
@@ -148,12 +157,10 @@ class EstimatorNode:
                               surface=self.surface)
 
     def on_pad(self, msg):
-        p, v = msg.pose.pose.position, msg.twist.twist.linear
-        problem = odometry_problem(msg)
-        if problem:
-            return self.rejections.reject("kalman_platform_odom", problem)
-        with self.lock:
-            self.estimator.pad(stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z))
+        pad = pad_odometry(msg, self.rejections)
+        if pad:
+            with self.lock:
+                self.estimator.pad(*pad)
 
     def on_vehicle(self, msg):
         v, w = msg.twist.twist.linear, msg.twist.twist.angular.z
@@ -340,11 +347,7 @@ class TrackingNode:
         problem = odometry_problem(msg) or numbers_problem(1.5, orientation=(q.w, q.x, q.y, q.z))
         if problem:
             return self.rejections.reject("ardrone/odom_estimate", problem)
-        # The camera looks along the body's -z: where that axis meets a level surface, per metre of height.
-        body_z = (2.0 * (q.x * q.z + q.w * q.y), 2.0 * (q.y * q.z - q.w * q.x), 1.0 - 2.0 * (q.x * q.x + q.y * q.y))
-        view_shift = -np.array(body_z[:2]) / body_z[2] if body_z[2] > 0.5 else None  # beyond 60 deg: no view
-        state = DroneState(np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]), yaw_from_quaternion(q.w, q.x, q.y, q.z),
-                           view_shift=view_shift)
+        state = DroneState.from_attitude((p.x, p.y, p.z), (v.x, v.y, v.z), (q.w, q.x, q.y, q.z))
         with self.lock:
             self.estimate = (stamp_of(msg), state)
 
@@ -385,13 +388,11 @@ class TrackingNode:
             self.prediction = None
 
     def on_pad_odom(self, msg):
-        p, v = msg.pose.pose.position, msg.twist.twist.linear
-        problem = odometry_problem(msg)
-        if problem:
-            return self.rejections.reject("kalman_platform_odom", problem)
-        with self.lock:
-            self.pad_odom = (stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z))
-            self.prediction = None
+        pad = pad_odometry(msg, self.rejections)
+        if pad:
+            with self.lock:
+                self.pad_odom = pad
+                self.prediction = None
 
     def on_navdata(self, msg):
         problem = choice_problem(msg.state, NAVDATA_STATES, "state") or header_problem(msg)
