@@ -130,15 +130,16 @@ class IsolatedProcess:
     """``command`` run against the master at ``master_uri``, in a new process group, its output in
     ``log_path``. Use as a context manager (from the thread that lives as long as the process should: it
     gets SIGINT when that thread ends, e.g. a runner SIGKILLed with the Ray worker that ran it): leaving it
-    interrupts the process (SIGINT, as Ctrl-C) and waits."""
+    interrupts the process (SIGINT, as Ctrl-C) and waits. ``env``: variables added to its environment."""
 
-    def __init__(self, command, log_path, master_uri):
+    def __init__(self, command, log_path, master_uri, env=None):
         self.command, self.log_path, self.master_uri = list(command), log_path, master_uri
+        self.extra_env = dict(env or {})
         self.process, self.interrupted = None, False
         self.exited_at = None  # time.monotonic() when leaving the context found the process ended
 
     def __enter__(self):
-        env = loopback_environment(dict(os.environ, ROS_MASTER_URI=self.master_uri))
+        env = loopback_environment(dict(os.environ, ROS_MASTER_URI=self.master_uri, **self.extra_env))
         self._log = open(self.log_path, "w")
         self.process = subprocess.Popen(self.command, env=env, stdout=self._log, stderr=subprocess.STDOUT,
                                         stdin=subprocess.DEVNULL, start_new_session=True,

@@ -75,16 +75,18 @@ def launch_arguments(s):
 
 
 def recorder_command(bag, split_s=0):
-    """rosbag record of the topics interface/record.launch records (its record_regex, in its chunk_kb chunks),
-    started directly: through a second roslaunch it took 0.4 s longer to start and to stop. With ``split_s`` > 0
-    a new bag every split_s seconds of sim time (NAME_0.bag, NAME_1.bag, ...; see split_bags)."""
+    """(command, environment) of rosbag record of the topics interface/record.launch records (its record_regex, in
+    its chunk_kb chunks, with its malloc_tunables), started directly: through a second roslaunch it took 0.4 s longer
+    to start and to stop. With ``split_s`` > 0 a new bag every split_s seconds of sim time (NAME_0.bag, NAME_1.bag,
+    ...; see split_bags)."""
     import xml.etree.ElementTree as ElementTree
     import rospkg
     launch = os.path.join(rospkg.RosPack().get_path("interface"), "launch", "record.launch")
     defaults = {arg.get("name"): arg.get("default") for arg in ElementTree.parse(launch).getroot().iter("arg")}
     split = ["--split", "--duration=%d" % split_s] if split_s > 0 else []
     return ["rosrun", "rosbag", "record", "--output-name=" + bag] + split + [
-        "--lz4", "--chunksize=" + defaults["chunk_kb"], "-e", defaults["record_regex"], "__name:=" + RECORDER]
+        "--lz4", "--chunksize=" + defaults["chunk_kb"], "-e", defaults["record_regex"], "__name:=" + RECORDER], {
+        "GLIBC_TUNABLES": defaults["malloc_tunables"]}
 
 
 def split_bags(bag):
@@ -131,8 +133,8 @@ class Recorders:
         index = len(self.bags) + 1
         bag = os.path.abspath(os.path.join(self.out_dir, "flight.bag" if index == 1 else "flight.%d.bag" % index))
         log = os.path.join(self.out_dir, "recorder.log" if index == 1 else "recorder.%d.log" % index)
-        self.current = self.stack.enter_context(IsolatedProcess(recorder_command(bag, self.split_s), log,
-                                                                self.master_uri))
+        command, env = recorder_command(bag, self.split_s)
+        self.current = self.stack.enter_context(IsolatedProcess(command, log, self.master_uri, env))
         self.bags.append(bag)
         return self.current
 
