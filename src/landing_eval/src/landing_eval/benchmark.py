@@ -330,6 +330,8 @@ def main(argv=None):
             task = progress.add_task("scenarios", total=len(files) * args.repeat * len(profiles),
                                      completed=len(results.rows))
             for spec, outcome in runs:
+                if outcome.get("interrupted"):  # the sweep is being stopped: --resume runs it again
+                    continue
                 row = row_of(spec, outcome)
                 if results.append(row):
                     progress.update(task, advance=1, description="%s: %s" % (row["name"], row.get("outcome")))

@@ -15,7 +15,7 @@ import threading
 import time
 
 from .isolated_ros import signal_on_parent_death
-from .runner import SHUT_DOWN_WALL_S, START_UP_WALL_S
+from .runner import INTERRUPTED, SHUT_DOWN_WALL_S, START_UP_WALL_S
 
 # Environment a run needs from the machine that starts the sweep: the venv and the built workspace (the
 # same paths on every node). ROS_MASTER_URI, ROS_IP and ROS_HOSTNAME are not among them: each run has
@@ -137,6 +137,10 @@ def execute_run(spec):
     elif outcome["failure"] is None:
         outcome["failure"] = "run_scenario exited with %s without a result; see %s" % (outcome["returncode"],
                                                                                        spec["log"])
+    # Stopped from outside, not by this pool's wall limit (the sweep's Ctrl-C reached the run too): no result of
+    # the scenario, to be run again.
+    outcome["interrupted"] = outcome["result"] is not None and outcome["failure"] is None and \
+        outcome["result"].get("outcome") == "aborted" and str(outcome["result"].get("error") or "").startswith(INTERRUPTED)
     if outcome["result"] is not None and outcome["failure"]:
         outcome["result"]["error"] = "; ".join(filter(None, [outcome["result"].get("error"), outcome["failure"]]))
     return outcome

@@ -34,6 +34,7 @@ SHUT_DOWN_WALL_S = 60.0         # stopping the recorder and the launch (20 s eac
 CLOCK_STALL_WALL_S = 30.0       # the sim clock standing still this long after the start: the simulator is gone [s]
 MODE_WAIT_S = 30.0              # sim seconds a next mission waits for the supervisor to be back on the ground
 RECORDER = "flight_recorder"
+INTERRUPTED = "interrupted"  # how the error of a run stopped from outside (Ctrl-C, SIGTERM) begins
 # A run whose time limit is over LONG_RUN_S records a bag per RECORDER_SPLIT_S of sim time: rosbag record holds
 # its whole bag's index in memory (about 1 MB a minute of flight) and frees it only when it starts the next bag [s].
 LONG_RUN_S = 600.0
@@ -696,7 +697,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
         result.update(outcome="aborted", error="%s: %s" % (type(err).__name__, err), touchdown_error_m=None,
                       time_to_land_s=None, decisions=monitor.decisions if monitor else [])
     except KeyboardInterrupt as err:
-        result.update(outcome="aborted", error="interrupted (%s)" % (err or "Ctrl-C"), touchdown_error_m=None,
+        result.update(outcome="aborted", error="%s (%s)" % (INTERRUPTED, err or "Ctrl-C"), touchdown_error_m=None,
                       time_to_land_s=None, decisions=monitor.decisions if monitor else [])
         finish(result, out_dir, wall_start, phases, monitor, recorders, steps)
         raise
