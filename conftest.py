@@ -1,5 +1,6 @@
 """Shared pytest set-up for every package's tests (`tests/run_all.sh` runs them from here)."""
 import os
+import signal
 import subprocess
 import time
 
@@ -23,6 +24,11 @@ STRICT_IMPORTS = os.environ.get("LANDING_TESTS_STRICT_IMPORTS") == "1"
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "needs_pty: the test types into a pseudo-terminal")
+    # Tests stop their children with SIGINT as Ctrl-C does. Started in the background of a script (`make test &`,
+    # nohup), this process begins with SIGINT ignored, which every child would inherit and so shrug the test's
+    # Ctrl-C off (a benchmark sweep ran on to its end): here it is Ctrl-C's own again, and so in the children.
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _as_import_failure(report):

@@ -330,7 +330,9 @@ def main(argv=None):
             task = progress.add_task("scenarios", total=len(files) * args.repeat * len(profiles),
                                      completed=len(results.rows))
             for spec, outcome in runs:
-                if outcome.get("interrupted"):  # the sweep is being stopped: --resume runs it again
+                if outcome.get("interrupted"):
+                    progress.console.print("%s was interrupted from outside: not counted (--resume runs it "
+                                           "again)" % spec["row"]["name"])
                     continue
                 row = row_of(spec, outcome)
                 if results.append(row):
