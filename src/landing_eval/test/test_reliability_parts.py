@@ -12,7 +12,7 @@ from types import SimpleNamespace
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from landing_eval import benchmark, missions, processes, scenario  # noqa: E402
+from landing_eval import benchmark, missions, processes, runner, scenario  # noqa: E402
 
 
 def touchdown(t, surface=1, crashed=False, pad_error=0.05):
@@ -168,3 +168,13 @@ def test_the_fuzz_summary_names_the_silent_subscribers_and_the_unthrottled_lines
     assert summary["topics"]["/landing_allowed"]["never_rejected_by"] == []  # bursts only: nothing to reject
     assert summary["unthrottled"][0]["node"] == "/drone_estimator" and summary["sim_time_fuzzed_s"] == 37.0
     assert summary["messages_sent"] == 34
+
+
+def test_the_bags_of_a_split_recording_are_found_in_their_order_with_the_names_they_have_once_repaired(tmp_path):
+    for name in ("flight_0.bag", "flight_1.bag", "flight_10.bag", "flight_2.bag.active", "flight_x.bag", "flight.bag",
+                 "flight.2_0.bag"):
+        (tmp_path / name).write_bytes(b"")
+    stem = str(tmp_path / "flight")
+    assert runner.split_bags(stem + ".bag") == [stem + "_0.bag", stem + "_1.bag", stem + "_2.bag", stem + "_10.bag"]
+    assert runner.split_bags(stem + ".2.bag") == [stem + ".2_0.bag"]
+    assert runner.split_bags(str(tmp_path / "none.bag")) == []
