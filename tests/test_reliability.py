@@ -15,6 +15,8 @@ import yaml
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "src", "landing_eval", "src"))
 from landing_eval import processes  # noqa: E402
+from landing_eval.isolated_ros import IsolatedCore, IsolatedLaunch, IsolatedProcess  # noqa: E402
+from landing_eval.runner import RECORDER, recorder_command  # noqa: E402
 from landing_eval.analysis_bag import read_bag  # noqa: E402
 
 RELIABILITY = os.path.join(ROOT, "scenarios", "reliability")
@@ -68,6 +70,34 @@ def test_three_missions_in_a_row_land_on_the_pad_with_flat_memory_and_loopback_o
     listening = result["listening"]
     assert set(listening) >= set(table) and all(listening.values())
     assert all(processes.is_loopback(address) for addresses in listening.values() for address in addresses), listening
+
+
+def recorder_allocator(root_pid, timeout_s=60.0):
+    """The memory allocator libraries mapped by the flight recorder below ``root_pid``, once it runs."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        pid = processes.nodes_below([root_pid]).get(RECORDER)
+        if pid is not None and processes.command_line(pid)[:1] and os.path.basename(
+                processes.command_line(pid)[0]) == "record":  # rosbag's C++ recorder, not its Python wrapper
+            with open("/proc/%d/maps" % pid) as stream:
+                maps = stream.read()
+            return {lib for lib in ("libjemalloc", "libc.so") if lib in maps}
+        time.sleep(0.2)
+    raise AssertionError("no flight recorder process after %.0f s" % timeout_s)
+
+
+def test_both_flight_recorders_run_on_jemalloc_which_gives_back_the_memory_of_their_queues(tmp_path):
+    # With glibc's allocator, what rosbag record queued while the machine was overloaded stayed in its memory
+    # (22 -> 28 MB in a soak); record.launch (start.launch's) and run_scenario's recorder preload jemalloc.
+    with IsolatedLaunch(["interface", "record.launch", "bag:=%s" % (tmp_path / "launch.bag")],
+                        str(tmp_path / "launch.log")) as launch:
+        launch.wait_for_master()
+        assert "libjemalloc" in recorder_allocator(launch.process.pid), (tmp_path / "launch.log").read_text()[-2000:]
+    command, env = recorder_command(str(tmp_path / "run.bag"))
+    with IsolatedCore(str(tmp_path / "core.log")) as core:
+        core.wait_for_master()
+        with IsolatedProcess(command, str(tmp_path / "run.log"), core.master_uri, env=env) as recorder:
+            assert "libjemalloc" in recorder_allocator(recorder.process.pid), (tmp_path / "run.log").read_text()[-2000:]
 
 
 def test_garbage_on_every_input_kills_no_node_is_rejected_by_every_consumer_and_logged_throttled(tmp_path):

@@ -77,7 +77,7 @@ def launch_arguments(s):
 
 def recorder_command(bag, split_s=0):
     """(command, environment) of rosbag record of the topics interface/record.launch records (its record_regex, in
-    its chunk_kb chunks, with its malloc_tunables), started directly: through a second roslaunch it took 0.4 s longer
+    its chunk_kb chunks, with its allocator and settings), started directly: through a second roslaunch it took 0.4 s longer
     to start and to stop. With ``split_s`` > 0 a new bag every split_s seconds of sim time (NAME_0.bag, NAME_1.bag,
     ...; see split_bags)."""
     import xml.etree.ElementTree as ElementTree
@@ -87,6 +87,7 @@ def recorder_command(bag, split_s=0):
     split = ["--split", "--duration=%d" % split_s] if split_s > 0 else []
     return ["rosrun", "rosbag", "record", "--output-name=" + bag] + split + [
         "--lz4", "--chunksize=" + defaults["chunk_kb"], "-e", defaults["record_regex"], "__name:=" + RECORDER], {
+        "LD_PRELOAD": defaults["allocator"], "MALLOC_CONF": defaults["allocator_conf"],
         "GLIBC_TUNABLES": defaults["malloc_tunables"]}
 
 
