@@ -72,8 +72,8 @@ def test_three_missions_in_a_row_land_on_the_pad_with_flat_memory_and_loopback_o
     assert all(processes.is_loopback(address) for addresses in listening.values() for address in addresses), listening
 
 
-def recorder_allocator(root_pid, timeout_s=60.0):
-    """The memory allocator libraries mapped by the flight recorder below ``root_pid``, once it runs."""
+def recorder_preloads(root_pid, timeout_s=60.0):
+    """Which of jemalloc and the loopback shim the flight recorder below ``root_pid`` has mapped, once it runs."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         pid = processes.nodes_below([root_pid]).get(RECORDER)
@@ -81,7 +81,7 @@ def recorder_allocator(root_pid, timeout_s=60.0):
                 processes.command_line(pid)[0]) == "record":  # rosbag's C++ recorder, not its Python wrapper
             with open("/proc/%d/maps" % pid) as stream:
                 maps = stream.read()
-            return {lib for lib in ("libjemalloc", "libc.so") if lib in maps}
+            return {lib for lib in ("libjemalloc", "liblanding_loopback_bind") if lib in maps}
         time.sleep(0.2)
     raise AssertionError("no flight recorder process after %.0f s" % timeout_s)
 
@@ -92,12 +92,15 @@ def test_both_flight_recorders_run_on_jemalloc_which_gives_back_the_memory_of_th
     with IsolatedLaunch(["interface", "record.launch", "bag:=%s" % (tmp_path / "launch.bag")],
                         str(tmp_path / "launch.log")) as launch:
         launch.wait_for_master()
-        assert "libjemalloc" in recorder_allocator(launch.process.pid), (tmp_path / "launch.log").read_text()[-2000:]
+        # (and keeps the loopback shim that env.sh and the runs preload)
+        assert recorder_preloads(launch.process.pid) == {"libjemalloc", "liblanding_loopback_bind"}, \
+            (tmp_path / "launch.log").read_text()[-2000:]
     command, env = recorder_command(str(tmp_path / "run.bag"))
     with IsolatedCore(str(tmp_path / "core.log")) as core:
         core.wait_for_master()
         with IsolatedProcess(command, str(tmp_path / "run.log"), core.master_uri, env=env) as recorder:
-            assert "libjemalloc" in recorder_allocator(recorder.process.pid), (tmp_path / "run.log").read_text()[-2000:]
+            assert recorder_preloads(recorder.process.pid) == {"libjemalloc", "liblanding_loopback_bind"}, \
+                (tmp_path / "run.log").read_text()[-2000:]
 
 
 def test_garbage_on_every_input_kills_no_node_is_rejected_by_every_consumer_and_logged_throttled(tmp_path):
