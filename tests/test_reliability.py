@@ -199,6 +199,22 @@ def test_a_run_killed_with_sigkill_leaves_a_bag_the_analysis_reads_to_the_last_s
     assert analysis.returncode == 0, analysis.stderr[-2000:]
 
 
+def test_the_simulator_stopped_while_it_publishes_ends_cleanly(tmp_path):
+    # roslaunch's SIGINT closes the publishers between the loop's shut-down check and a publish: before, one stop in
+    # three printed "publish() to a closed topic" with a traceback (35 of the 112 suite runs).
+    for attempt in range(4):
+        log = tmp_path / ("launch%d.log" % attempt)
+        with IsolatedLaunch(["mujoco_sim", "sim.launch", "real_time_factor:=0"], str(log)) as launch:
+            launch.wait_for_master()
+            # Two reports of the simulator (one every 5 s of sim time): its loop steps and publishes at full speed.
+            echo = subprocess.run(["rostopic", "echo", "-n", "2", "/sim_stats"], capture_output=True, text=True,
+                                  timeout=120, stdin=subprocess.DEVNULL,
+                                  env=dict(os.environ, ROS_MASTER_URI=launch.master_uri))
+            assert echo.returncode == 0, echo.stderr[-2000:] + log.read_text()[-3000:]
+        text = log.read_text()
+        assert "Traceback" not in text and "has died" not in text, text[-3000:]
+
+
 def test_env_sh_keeps_ros_on_loopback_unless_the_user_opens_it():
     def sourced(setup):
         script = "unset ROS_IP ROS_HOSTNAME LANDING_ROS_LOOPBACK LD_PRELOAD; %s source env.sh; " \

@@ -232,7 +232,19 @@ class SimNode:
             self.started.wait(0.1)
 
     def spin(self, max_sim_time=None):
-        self._wait_for_start_signal()
+        try:
+            self._wait_for_start_signal()
+            self._step_and_publish(max_sim_time)
+        except rospy.ROSException:
+            # A stop (SIGINT from roslaunch) closes the publishers between the loop's shut-down check and a
+            # publish: that is the end of the run, not an error (it printed a traceback at one stop in three).
+            # (rospy closes them in its pre-shutdown hooks, before is_shutdown() turns true.)
+            if not rospy.core.is_shutdown_requested():
+                raise
+        finally:
+            self.sim.close()
+
+    def _step_and_publish(self, max_sim_time):
         rtf = self.cfg["real_time_factor"]
         wall_start, sim_start = time.monotonic(), self.sim.time
         viewer = self._open_viewer() if self.viewer_requested else None
@@ -259,7 +271,6 @@ class SimNode:
                 viewer.sync()
             if max_sim_time is not None and self.sim.time >= max_sim_time:
                 break
-        self.sim.close()
 
     def _wait_for_lagging_nodes(self):
         """Lock-step: hold sim time while a node that acknowledges its work lags too far behind."""
