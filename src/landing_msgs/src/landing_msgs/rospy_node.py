@@ -20,6 +20,7 @@ parameters and whose ``tick()`` runs at its rate:
 - Prompt exit: rospy.spin() looks for the shutdown every 0.5 s and a sleep on sim time every 0.3 s
   once the clock has stopped; here both wake up as soon as rospy shuts down.
 """
+import contextlib
 import socket
 import threading
 import warnings
@@ -104,19 +105,33 @@ def spin():
         stopped.wait(1.0)
 
 
+@contextlib.contextmanager
+def ended_by_shutdown():
+    """Around a node's publishing loop: a stop (SIGINT, as roslaunch sends) closes the publishers between the
+    loop's is_shutdown() check and a publish, which then raises; that ends the loop quietly instead of with a
+    traceback. (rospy closes them in its pre-shutdown hooks, before is_shutdown() turns true.) Any other
+    ROSException still raises."""
+    try:
+        yield
+    except rospy.ROSException:
+        if not rospy.core.is_shutdown_requested():
+            raise
+
+
 def spin_at(rate_hz, tick):
     """Call ``tick()`` at ``rate_hz`` of ROS time (sim time under /use_sim_time) until rospy shuts down; not
     before the clock runs (a scenario holds the physics at first). A jump back in time is logged, not fatal."""
     rate = rospy.Rate(rate_hz)
-    while not rospy.is_shutdown():
-        if rospy.get_time() > 0.0:
-            tick()
-        try:
-            rate.sleep()
-        except rospy.ROSTimeMovedBackwardsException:
-            rospy.logwarn("%s: ROS time moved backwards; carrying on", rospy.get_name())
-        except rospy.ROSInterruptException:
-            break
+    with ended_by_shutdown():
+        while not rospy.is_shutdown():
+            if rospy.get_time() > 0.0:
+                tick()
+            try:
+                rate.sleep()
+            except rospy.ROSTimeMovedBackwardsException:
+                rospy.logwarn("%s: ROS time moved backwards; carrying on", rospy.get_name())
+            except rospy.ROSInterruptException:
+                break
 
 
 def run_node(name, make_node, startup_errors):

@@ -20,7 +20,7 @@ from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from landing_msgs.geometry import euler_from_quaternion
 from landing_msgs.input_check import RosRejectionLog
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
-from landing_msgs.rospy_node import init_node, without_nagle
+from landing_msgs.rospy_node import ended_by_shutdown, init_node, without_nagle
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
@@ -232,15 +232,11 @@ class SimNode:
             self.started.wait(0.1)
 
     def spin(self, max_sim_time=None):
+        # (a stop that closes the publishers mid-publish printed a traceback at one stop in three)
         try:
-            self._wait_for_start_signal()
-            self._step_and_publish(max_sim_time)
-        except rospy.ROSException:
-            # A stop (SIGINT from roslaunch) closes the publishers between the loop's shut-down check and a
-            # publish: that is the end of the run, not an error (it printed a traceback at one stop in three).
-            # (rospy closes them in its pre-shutdown hooks, before is_shutdown() turns true.)
-            if not rospy.core.is_shutdown_requested():
-                raise
+            with ended_by_shutdown():
+                self._wait_for_start_signal()
+                self._step_and_publish(max_sim_time)
         finally:
             self.sim.close()
 

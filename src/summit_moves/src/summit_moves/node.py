@@ -8,7 +8,7 @@ import sys
 import rospy
 from geometry_msgs.msg import Twist
 from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import direct_publisher, init_node
+from landing_msgs.rospy_node import direct_publisher, ended_by_shutdown, init_node
 from std_msgs.msg import Empty
 
 from .paths import Path, PathError
@@ -46,23 +46,24 @@ def main():
         started["flag"] = True
         rospy.logwarn("summit_moves: restarted; carrying on along the path started at t=%.2f s", resumed_start)
     rospy.loginfo("summit_moves: %s path at %.2f m/s (radius %.1f m)", path.kind, path.speed, path.radius)
-    while not rospy.is_shutdown():
-        stamp = rospy.Time.now()
-        now = stamp.to_sec()
-        if started["flag"] and start_time is None:
-            start_time = now + start_delay
+    with ended_by_shutdown():
+        while not rospy.is_shutdown():
+            stamp = rospy.Time.now()
+            now = stamp.to_sec()
+            if started["flag"] and start_time is None:
+                start_time = now + start_delay
+                try:
+                    rospy.set_param("~started_at", {"time": start_time, "launch_id": launch_id})
+                except Exception as err:  # the master is gone: a restart would start the path afresh
+                    rospy.logwarn("summit_moves: cannot keep the path's start time for a restart: %s", err)
+            speed, yaw_rate = path.command(now - start_time) if start_time is not None else (0.0, 0.0)
+            msg = Twist()
+            msg.linear.x, msg.angular.z = speed, yaw_rate
+            publisher.publish(msg)
+            lockstep.ack(stamp)
             try:
-                rospy.set_param("~started_at", {"time": start_time, "launch_id": launch_id})
-            except Exception as err:  # the master is gone: a restart would start the path afresh
-                rospy.logwarn("summit_moves: cannot keep the path's start time for a restart: %s", err)
-        speed, yaw_rate = path.command(now - start_time) if start_time is not None else (0.0, 0.0)
-        msg = Twist()
-        msg.linear.x, msg.angular.z = speed, yaw_rate
-        publisher.publish(msg)
-        lockstep.ack(stamp)
-        try:
-            rate.sleep()
-        except rospy.ROSTimeMovedBackwardsException:
-            start_time = None
-        except rospy.ROSInterruptException:
-            break
+                rate.sleep()
+            except rospy.ROSTimeMovedBackwardsException:
+                start_time = None
+            except rospy.ROSInterruptException:
+                break
