@@ -72,6 +72,31 @@ def test_three_missions_in_a_row_land_on_the_pad_with_flat_memory_and_loopback_o
     assert all(processes.is_loopback(address) for addresses in listening.values() for address in addresses), listening
 
 
+def test_a_soak_stopped_by_sigterm_reports_the_missions_it_flew_and_leaves_nothing_running(tmp_path):
+    # (a soak started in the background of a script ignores Ctrl-C: SIGTERM is how it is stopped, and it ended
+    # at once without result.json or soak.md)
+    out, log = tmp_path / "soak", tmp_path / "soak.log"
+    with open(log, "w") as stream:
+        soak = subprocess.Popen(["rosrun", "landing_eval", "soak", "--scenario",
+                                 os.path.join(RELIABILITY, "soak_3_missions.yaml"), "--out", str(out)],
+                                stdout=stream, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + TIMEOUT_S
+        while "mission 2 at t=" not in log.read_text():
+            assert time.monotonic() < deadline and soak.poll() is None, log.read_text()[-3000:]
+            time.sleep(0.5)
+        os.kill(soak.pid, signal.SIGTERM)
+        assert soak.wait(timeout=120) == 130, log.read_text()[-3000:]
+    finally:
+        if soak.poll() is None:
+            os.killpg(soak.pid, signal.SIGKILL)
+    result = json.loads((out / "result.json").read_text())
+    assert result["outcome"] == "aborted" and "SIGTERM" in result["error"]
+    assert result["missions"][0]["outcome"] == "landed_on_pad"
+    assert "| 1 | " in (out / "soak.md").read_text() and "interrupted" in log.read_text()
+    assert not [pid for pid in processes.children_map() if str(out) in " ".join(processes.command_line(pid))]
+
+
 def recorder_preloads(root_pid, timeout_s=60.0):
     """Which of jemalloc and the loopback shim the flight recorder below ``root_pid`` has mapped, once it runs."""
     deadline = time.monotonic() + timeout_s

@@ -41,6 +41,22 @@ def _scenario_copy(path, out_dir, change):
     return copy
 
 
+def _run(command, path, out_dir, **kwargs):
+    """runner.run(path, out_dir, **kwargs), stopped by SIGTERM as by Ctrl-C: (result, interrupted). An interrupted
+    run still wrote its result.json (the missions flown so far): its report is written too."""
+    runner.stop_on_sigterm()
+    try:
+        return runner.run(path, out_dir, **kwargs), False
+    except KeyboardInterrupt as err:
+        try:
+            with open(os.path.join(out_dir, "result.json")) as stream:
+                result = json.load(stream)
+        except (OSError, ValueError):
+            raise err from None
+        print("%s: interrupted (%s); the report covers what was flown" % (command, err or "Ctrl-C"), file=sys.stderr)
+        return result, True
+
+
 def _fmt(value, pattern="%.3f"):
     return "-" if value is None else pattern % value
 
@@ -122,7 +138,7 @@ def soak_main(argv=None):
                                                     args.missions * (pause + 90.0)))
     try:
         path = _scenario_copy(args.scenario, args.out, change)
-        result = runner.run(path, args.out, realism=args.realism, split_s=args.bag_split_s)
+        result, interrupted = _run("soak", path, args.out, realism=args.realism, split_s=args.bag_split_s)
     except (scenario_mod.ScenarioError, OSError, KeyError) as err:
         print("soak: %s" % err, file=sys.stderr)
         return 2
@@ -134,7 +150,7 @@ def soak_main(argv=None):
     table = result.get("resources", {}).get("table", {})
     met = result.get("missions_on_pad", 0) == result["missions_planned"] and not deaths(result) and all(
         row["rss_growth_pct"] is not None and row["rss_growth_pct"] < MEMORY_GROWTH_TARGET_PCT for row in table.values())
-    return 0 if met else 1
+    return 130 if interrupted else 0 if met else 1
 
 
 # ----- fuzz -------------------------------------------------------------------------------------------
@@ -182,7 +198,7 @@ def fuzz_main(argv=None):
         if args.seed is not None:
             data["fuzz"]["seed"] = args.seed
     try:
-        result = runner.run(_scenario_copy(args.scenario, args.out, change), args.out)
+        result, interrupted = _run("fuzz", _scenario_copy(args.scenario, args.out, change), args.out)
     except (scenario_mod.ScenarioError, OSError, KeyError) as err:
         print("fuzz: %s" % err, file=sys.stderr)
         return 2
@@ -191,7 +207,7 @@ def fuzz_main(argv=None):
                                                                         "sim_time_s", "error")})
     print(text)
     unsafe = [m for m in result.get("missions") or [] if m["outcome"] in UNSAFE]
-    return 0 if not deaths(result) and not unsafe and result["outcome"] != "aborted" else 1
+    return 130 if interrupted else 0 if not deaths(result) and not unsafe and result["outcome"] != "aborted" else 1
 
 
 # ----- crash table ------------------------------------------------------------------------------------

@@ -33,6 +33,10 @@ START_UP_WALL_S = 240.0         # master, graph, recorder, connections and the f
 SHUT_DOWN_WALL_S = 60.0         # stopping the recorder and the launch (20 s each before SIGKILL), reindexing [s]
 CLOCK_STALL_WALL_S = 30.0       # the sim clock standing still this long after the start: the simulator is gone [s]
 MODE_WAIT_S = 30.0              # sim seconds a next mission waits for the supervisor to be back on the ground
+# Sim seconds between setting a mission's conditions (a fresh battery) and choosing the landing mode: the master
+# pushes the new parameters to the nodes while the operator's command travels on a topic, and the supervisor
+# refused a take-off on the battery just swapped out (36.5 % < 40 %) when the command came first.
+CONDITIONS_SETTLE_S = 1.0
 RECORDER = "flight_recorder"
 INTERRUPTED = "interrupted"  # how the error of a run stopped from outside (Ctrl-C, SIGTERM) begins
 # A run whose time limit is over LONG_RUN_S records a bag per RECORDER_SPLIT_S of sim time: rosbag record holds
@@ -416,8 +420,8 @@ class FlightMonitor:
 
     def _next_mission(self, plan, t):
         """Before the next mission: the operator acknowledges an emergency report, then once the supervisor is
-        back on the ground sets the new conditions (and a fresh battery) and chooses the landing mode again.
-        Returns True once the mission started."""
+        back on the ground sets the new conditions (and a fresh battery) and, CONDITIONS_SETTLE_S later, chooses
+        the landing mode again. Returns True once the mission started."""
         if self.s.get("_supervisor"):
             if self.supervisor_mode == "emergency":
                 self._operator("ack")
@@ -425,15 +429,22 @@ class FlightMonitor:
             waited = t - self._pause_end
             if self.supervisor_mode not in ("landed", "idle") and waited < MODE_WAIT_S:
                 return False
-        try:
-            battery = self.rospy.get_param("/drone_battery")
-        except Exception:  # unreadable or the master gone: swap
-            battery = None
-        index = len(self.missions.records) + 1
-        params, swapped = missions_mod.next_mission_settings(plan, index, battery)
-        for name, value in params.items():
-            self._set_param(name, value)
-        self.rospy.loginfo("mission %d at t=%.2f s: %s", index, t, params or "same conditions")
+        if self._conditions_set is None:
+            try:
+                battery = self.rospy.get_param("/drone_battery")
+            except Exception:  # unreadable or the master gone: swap
+                battery = None
+            index = len(self.missions.records) + 1
+            params, swapped = missions_mod.next_mission_settings(plan, index, battery)
+            for name, value in params.items():
+                self._set_param(name, value)
+            self._conditions_set = (t, params, swapped)
+            return False
+        set_at, params, swapped = self._conditions_set
+        if t - set_at < CONDITIONS_SETTLE_S:
+            return False
+        self._conditions_set = None
+        self.rospy.loginfo("mission %d at t=%.2f s: %s", len(self.missions.records) + 1, t, params or "same conditions")
         self.emergency_position = None
         self.missions.start(t, params, swapped)
         self._operator("landing")
@@ -448,6 +459,7 @@ class FlightMonitor:
         clock = {"t": rospy.get_time(), "wall": time.monotonic()}
         self.faults.prepare([e["name"] for e in schedule.pending if e.get("fault") == "kill_node"])
         self._pause_end = None  # sim time the next mission may start
+        self._conditions_set = None  # (sim time, conditions, battery swapped) of the next mission, once set
         while True:
             t = rospy.get_time()
             for event in schedule.due(t):
@@ -700,6 +712,8 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     except KeyboardInterrupt as err:
         result.update(outcome="aborted", error="%s (%s)" % (INTERRUPTED, err or "Ctrl-C"), touchdown_error_m=None,
                       time_to_land_s=None, decisions=monitor.decisions if monitor else [])
+        if monitor is not None and monitor.missions.records:  # the missions flown so far, for a soak's report
+            result["missions"] = monitor.missions.records
         finish(result, out_dir, wall_start, phases, monitor, recorders, steps)
         raise
     for name, process in (("recorder", recorders and recorders.current), ("launch", ros), ("master", core)):
