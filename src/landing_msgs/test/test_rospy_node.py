@@ -68,8 +68,7 @@ def test_sigint_ends_a_sleep_on_a_stopped_sim_clock(ros_master):
 
 # Publishes on many topics, each with a subscriber (itself), as fast as it can, as the simulator does at full
 # speed: a stop closes the publishers one after the other before is_shutdown() turns true, and a publish meets a
-# closed one. {guard} is the loop's
-# context ("contextlib.nullcontext()" = without it).
+# closed one. {guard} is the loop's context ("contextlib.nullcontext()" = without it).
 PUBLISHING_NODE = NODE.format(wait="""
 import contextlib
 from landing_msgs.rospy_node import direct_publisher, ended_by_shutdown
