@@ -79,7 +79,8 @@ def test_a_soak_stopped_by_sigterm_reports_the_missions_it_flew_and_leaves_nothi
     with open(log, "w") as stream:
         soak = subprocess.Popen(["rosrun", "landing_eval", "soak", "--scenario",
                                  os.path.join(RELIABILITY, "soak_3_missions.yaml"), "--out", str(out)],
-                                stdout=stream, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+                                stdout=stream, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True,
+                                env=dict(os.environ, PYTHONUNBUFFERED="1"))  # its lines in the log as they come
     try:
         deadline = time.monotonic() + TIMEOUT_S
         while "mission 2 at t=" not in log.read_text():
