@@ -103,8 +103,8 @@ def recorder_preloads(root_pid, timeout_s=60.0):
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         pid = processes.nodes_below([root_pid]).get(RECORDER)
-        if pid is not None and processes.command_line(pid)[:1] and os.path.basename(
-                processes.command_line(pid)[0]) == "record":  # rosbag's C++ recorder, not its Python wrapper
+        program = processes.command_line(pid)[:1] if pid is not None else []
+        if [os.path.basename(p) for p in program] == ["record"]:  # rosbag's C++ recorder, not its Python wrapper
             with open("/proc/%d/maps" % pid) as stream:
                 maps = stream.read()
             return {lib for lib in ("libjemalloc", "liblanding_loopback_bind") if lib in maps}
