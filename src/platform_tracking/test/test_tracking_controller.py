@@ -69,6 +69,25 @@ def test_lookahead_damps_the_closing_speed():
     assert closing[0] == pytest.approx(params.position_gain * (1.0 - 0.5 * 1.0))
 
 
+def test_along_the_pad_travel_the_error_has_its_own_gain_across_the_position_gain():
+    params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, position_gain=1.0,
+                            along_track_gain=2.5)
+    controller = TrackingController(params)
+    # The pad travels along +y at 3 m/s, 0.2 m ahead of the drone and 0.1 m beside it (world +x).
+    command = controller.world_velocity(0.0, drone(vy=3.0), still_pad(0.1, 0.2, vy=3.0))
+    assert command == pytest.approx((1.0 * 0.1, 3.0 + 2.5 * 0.2))
+    # Stopped, it keeps the axis it travelled along.
+    command = controller.world_velocity(0.1, drone(), still_pad(0.1, 0.2, stamp=0.1))
+    assert command == pytest.approx((1.0 * 0.1, 2.5 * 0.2))
+
+
+def test_a_pad_that_never_moved_has_no_travel_axis_and_one_gain():
+    params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, position_gain=1.0,
+                            along_track_gain=2.5)
+    command = TrackingController(params).world_velocity(0.0, drone(), still_pad(0.3, 0.4))
+    assert command == pytest.approx((0.3, 0.4))
+
+
 def circle_prediction(t0, speed=3.0, radius=10.0, horizon=2.0):
     """The pad on a counter-clockwise circle around (0, radius), at (0, 0) heading +x at ``t0``."""
     omega = speed / radius

@@ -177,6 +177,7 @@ class TrackingController:
         # short by on a turn (drag, its own loop's lag) is constant there, while in the world it rotates.
         self.integral = np.zeros(2)
         self.travel_heading = 0.0     # direction of the pad's velocity, kept while it stands still [rad]
+        self.travel_known = False     # the pad has moved since this controller was made: travel_heading holds
         self.turn_changed_at = None   # when the pad last entered or left a turn [s]
         self.last_time = None
         self.velocity_history = collections.deque()  # (stamp, pad velocity) of recent predictions
@@ -240,6 +241,7 @@ class TrackingController:
         pad_velocity = self.pad_velocity(t, pad)
         if np.hypot(*pad_velocity) > 0.3:
             self.travel_heading = float(np.arctan2(pad_velocity[1], pad_velocity[0]))
+            self.travel_known = True
         c, s = np.cos(self.travel_heading), np.sin(self.travel_heading)
         to_world = np.array([[c, -s], [s, c]])
         turn_change = abs(pad.turn_change_at(t)) > p.integral_max_pad_acceleration
@@ -255,7 +257,11 @@ class TrackingController:
             self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)
         w = min(1.0, max(0.0, flow_weight))
-        correction = clamp_norm(p.position_gain * error + (1.0 - w) * p.integral_gain * (to_world @ self.integral),
+        # Along the pad's travel the error comes from its changes of speed, which the prediction learns late
+        # (a pull-away, a braking); across it from turns, where a higher gain overshoots the corner.
+        along_gain = p.along_track_gain if self.travel_known else p.position_gain
+        proportional = to_world @ (np.array([along_gain, p.position_gain]) * (to_world.T @ error))
+        correction = clamp_norm(proportional + (1.0 - w) * p.integral_gain * (to_world @ self.integral),
                                 p.max_correction_speed)
         feed = self.pad_velocity(t, pad, ahead=p.velocity_lead + w * p.flow_time_lead)
         if w > 0.0:
