@@ -70,15 +70,21 @@ def test_lookahead_damps_the_closing_speed():
 
 
 def test_along_the_pad_travel_the_error_has_its_own_gain_across_the_position_gain():
-    params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, position_gain=1.0,
-                            along_track_gain=2.5)
+    params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, flow_time_lead=0.0,
+                            acceleration_window=0.0, position_gain=1.0, along_track_gain=2.5)
     controller = TrackingController(params)
     # The pad travels along +y at 3 m/s, 0.2 m ahead of the drone and 0.1 m beside it (world +x).
-    command = controller.world_velocity(0.0, drone(vy=3.0), still_pad(0.1, 0.2, vy=3.0))
-    assert command == pytest.approx((1.0 * 0.1, 3.0 + 2.5 * 0.2))
-    # Stopped, it keeps the axis it travelled along.
-    command = controller.world_velocity(0.1, drone(), still_pad(0.1, 0.2, stamp=0.1))
+    # Low over the vehicle (the drone's flow follows it alone, w = 1) the feed-forward is only the lead (0 here).
+    command = controller.world_velocity(0.0, drone(vy=3.0), still_pad(0.1, 0.2, vy=3.0), flow_weight=1.0)
     assert command == pytest.approx((1.0 * 0.1, 2.5 * 0.2))
+    # Stopped, it keeps the axis it travelled along.
+    command = controller.world_velocity(0.1, drone(), still_pad(0.1, 0.2, stamp=0.1), flow_weight=1.0)
+    assert command == pytest.approx((1.0 * 0.1, 2.5 * 0.2))
+    # With the flow on the ground (w = 0) one gain; half-way, half-way between the two.
+    command = controller.world_velocity(0.2, drone(), still_pad(0.1, 0.2, stamp=0.2))
+    assert command == pytest.approx((0.1, 0.2))
+    command = controller.world_velocity(0.3, drone(), still_pad(0.1, 0.2, stamp=0.3), flow_weight=0.5)
+    assert command == pytest.approx((0.1, 1.75 * 0.2))
 
 
 def test_a_pad_that_never_moved_has_no_travel_axis_and_one_gain():

@@ -3,7 +3,7 @@
 The velocity command is built in ``world`` and rotated into the *heading frame* at the very end
 (``ardrone/cmd_vel``: linear.x forward, linear.y left of the drone's yaw-only frame):
 
-    v_cmd = v_ff + (1 - w) ki * integral(e) + kp * e   (capped)
+    v_cmd = v_ff + (1 - w) ki * integral(e) + K e   (capped)
     e     = pad(t) - drone(t) + L * (v_pad(t) - v_drone)
     v_ff  = v_pad(t + T_v + w T_f) - w v_pad(t)
 
@@ -17,6 +17,8 @@ The velocity command is built in ``world`` and rotated into the *heading frame* 
   The integral is kept, not learnt, while w > 0.1: learnt there it held an estimate's bias, and turned
   round with the travel frame at a back-and-forth's reversal it pushed the drone off the pad.
 
+- ``K``: ``along_track_gain`` on the error along the pad's travel (its changes of speed, which the prediction
+  learns late), ``position_gain`` across it (turns, where a high gain overshoots) and before the pad ever moved.
 - ``pad(t)`` comes from the *predicted* path (kalman_prediction_path); the prediction is ``age``
   seconds old when it arrives, so it is read at the current time, not at its stamp: that is the
   pipeline latency compensation.
@@ -252,14 +254,17 @@ class TrackingController:
         # holds against the wind must be re-learnt at once.)
         settled = self.turn_changed_at is None or t - self.turn_changed_at >= p.integral_turn_settle_time
         steady = settled and not turn_change and abs(pad.speed_change_at(t)) <= p.integral_max_pad_acceleration
+        w = min(1.0, max(0.0, flow_weight))
         if accumulate and steady and flow_weight <= 0.1 and np.hypot(*error) < p.integral_error_limit and \
                 p.integral_gain > 0.0:
             self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)
-        w = min(1.0, max(0.0, flow_weight))
         # Along the pad's travel the error comes from its changes of speed, which the prediction learns late
-        # (a pull-away, a braking); across it from turns, where a higher gain overshoots the corner.
-        along_gain = p.along_track_gain if self.travel_known else p.position_gain
+        # (a pull-away, a braking); across it from turns, where a higher gain overshoots the corner. Only as
+        # far as the drone's flow follows the vehicle (low over it): with the flow on the ground, at 4 m in
+        # harsh's 0.2 s camera latency, the higher gain kept the drone swinging about the pad.
+        along_gain = p.position_gain + w * (p.along_track_gain - p.position_gain) if self.travel_known \
+            else p.position_gain
         proportional = to_world @ (np.array([along_gain, p.position_gain]) * (to_world.T @ error))
         correction = clamp_norm(proportional + (1.0 - w) * p.integral_gain * (to_world @ self.integral),
                                 p.max_correction_speed)
