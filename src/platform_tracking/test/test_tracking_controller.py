@@ -90,7 +90,8 @@ def test_along_the_pad_travel_the_error_has_its_own_gain_across_the_position_gai
 def test_a_pad_that_never_moved_has_no_travel_axis_and_one_gain():
     params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, position_gain=1.0,
                             along_track_gain=2.5)
-    command = TrackingController(params).world_velocity(0.0, drone(), still_pad(0.3, 0.4))
+    # Even low over the vehicle (w = 1), where a moving pad's travel gets along_track_gain.
+    command = TrackingController(params).world_velocity(0.0, drone(), still_pad(0.3, 0.4), flow_weight=1.0)
     assert command == pytest.approx((0.3, 0.4))
 
 
