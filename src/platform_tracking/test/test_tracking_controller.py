@@ -80,17 +80,31 @@ def test_along_the_pad_travel_the_error_has_its_own_gain_across_the_position_gai
     # Stopped, it keeps the axis it travelled along.
     command = controller.world_velocity(0.1, drone(), still_pad(0.1, 0.2, stamp=0.1), flow_weight=1.0)
     assert command == pytest.approx((1.0 * 0.1, 2.5 * 0.2))
-    # With the flow on the ground (w = 0) one gain; half-way, half-way between the two.
+    # With the flow on the ground (w = 0) too.
     command = controller.world_velocity(0.2, drone(), still_pad(0.1, 0.2, stamp=0.2))
-    assert command == pytest.approx((0.1, 0.2))
-    command = controller.world_velocity(0.3, drone(), still_pad(0.1, 0.2, stamp=0.3), flow_weight=0.5)
-    assert command == pytest.approx((0.1, 1.75 * 0.2))
+    assert command == pytest.approx((1.0 * 0.1, 2.5 * 0.2))
+
+
+def test_the_along_track_gain_falls_as_the_camera_latency_grows():
+    params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, flow_time_lead=0.0,
+                            acceleration_window=0.0, position_gain=1.0, along_track_gain=2.5,
+                            along_track_gain_latency=0.25)
+    controller = TrackingController(params)
+    controller.world_velocity(0.0, drone(vy=3.0), still_pad(0.1, 0.2, vy=3.0), flow_weight=1.0)  # travel: +y
+
+    def along(t, latency):
+        return controller.world_velocity(t, drone(), still_pad(0.1, 0.2, stamp=t), flow_weight=1.0,
+                                         camera_latency=latency)[1] / 0.2
+    assert along(0.1, 0.0) == pytest.approx(2.5)    # unknown (no detection yet): the configured gain
+    assert along(0.2, 0.05) == pytest.approx(2.5)   # 0.25 / 0.05 = 5 would be more: capped by the gain
+    assert along(0.3, 0.2) == pytest.approx(1.25)   # harsh's link: 0.25 / 0.2
+    assert along(0.4, 1.0) == pytest.approx(1.0)    # never below the gain across the travel
 
 
 def test_a_pad_that_never_moved_has_no_travel_axis_and_one_gain():
     params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, position_gain=1.0,
                             along_track_gain=2.5)
-    # Even low over the vehicle (w = 1), where a moving pad's travel gets along_track_gain.
+    # Even low over the vehicle (w = 1).
     command = TrackingController(params).world_velocity(0.0, drone(), still_pad(0.3, 0.4), flow_weight=1.0)
     assert command == pytest.approx((0.3, 0.4))
 

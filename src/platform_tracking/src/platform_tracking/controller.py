@@ -18,7 +18,8 @@ The velocity command is built in ``world`` and rotated into the *heading frame* 
   round with the travel frame at a back-and-forth's reversal it pushed the drone off the pad.
 
 - ``K``: ``along_track_gain`` on the error along the pad's travel (its changes of speed, which the prediction
-  learns late), ``position_gain`` across it (turns, where a high gain overshoots) and before the pad ever moved.
+  learns late), at most ``along_track_gain_latency`` over the measured camera latency; ``position_gain`` across
+  it (turns, where a high gain overshoots) and before the pad ever moved.
 - ``pad(t)`` comes from the *predicted* path (kalman_prediction_path); the prediction is ``age``
   seconds old when it arrives, so it is read at the current time, not at its stamp: that is the
   pipeline latency compensation.
@@ -227,10 +228,11 @@ class TrackingController:
         else:
             self.acceleration = np.zeros(2)
 
-    def world_velocity(self, t, drone: DroneState, pad: PadPrediction, accumulate=True, flow_weight=0.0):
+    def world_velocity(self, t, drone: DroneState, pad: PadPrediction, accumulate=True, flow_weight=0.0,
+                       camera_latency=0.0):
         """Horizontal velocity command in the world frame, as the drone flies it (see the module docstring for
-        ``flow_weight``). ``accumulate`` False freezes the integral (it still applies: at speed it holds what
-        the drone's own velocity loop falls short by)."""
+        ``flow_weight``; ``camera_latency``: how late detections arrive after their image). ``accumulate`` False
+        freezes the integral (it still applies: at speed it holds what the drone's own velocity loop falls short by)."""
         p = self.p
         error, relative_velocity = self.errors(t, drone, pad)
         error = error + p.lookahead * relative_velocity
@@ -260,11 +262,9 @@ class TrackingController:
             self.integral += to_world.T @ error * dt
             self.integral = clamp_norm(self.integral, p.integral_speed_limit / p.integral_gain)
         # Along the pad's travel the error comes from its changes of speed, which the prediction learns late
-        # (a pull-away, a braking); across it from turns, where a higher gain overshoots the corner. Only as
-        # far as the drone's flow follows the vehicle (low over it): with the flow on the ground, at 4 m in
-        # harsh's 0.2 s camera latency, the higher gain kept the drone swinging about the pad.
-        along_gain = p.position_gain + w * (p.along_track_gain - p.position_gain) if self.travel_known \
-            else p.position_gain
+        # (a pull-away, a braking); across it from turns, where a higher gain overshoots the corner. How high the
+        # gain may go depends on the delay in the loop, mostly the camera's.
+        along_gain = self.along_track_gain(camera_latency) if self.travel_known else p.position_gain
         proportional = to_world @ (np.array([along_gain, p.position_gain]) * (to_world.T @ error))
         correction = clamp_norm(proportional + (1.0 - w) * p.integral_gain * (to_world @ self.integral),
                                 p.max_correction_speed)
@@ -272,6 +272,14 @@ class TrackingController:
         if w > 0.0:
             feed = feed - w * pad_velocity
         return clamp_norm(feed + correction, p.max_horizontal_speed)
+
+    def along_track_gain(self, camera_latency):
+        """The gain along the pad's travel: a loop with a delay bears a gain up to about the inverse of that delay
+        (``camera_latency``, 0 when not known yet)."""
+        p = self.p
+        if camera_latency <= 0.0:
+            return p.along_track_gain
+        return max(p.position_gain, min(p.along_track_gain, p.along_track_gain_latency / camera_latency))
 
     @staticmethod
     def to_heading_frame(world_xy, yaw):

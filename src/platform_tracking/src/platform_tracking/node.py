@@ -56,6 +56,7 @@ from .state_machine import Inputs, State, TrackingStateMachine
 
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
+DELAY_SAMPLES = 15         # detections whose capture-to-arrival delay gives the camera latency (a median: robust to one late frame) [-]
 WORLD_FRAMES = ("world", "/world", "")
 COMMANDS = ("takeoff", "land", "force_land", "hold")
 BODY_FRAME = "ardrone/base_link"  # the drone's body frame (docs/conventions.md): sonar and relative pad positions
@@ -319,6 +320,7 @@ class TrackingNode:
         self.requests = []            # operator requests since the last step, in arrival order
         self.landing_allowed = True
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
+        self.detection_delays = collections.deque(maxlen=DELAY_SAMPLES)  # arrival minus capture of recent ones [s]
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -421,6 +423,7 @@ class TrackingNode:
             return self.rejections.reject("platform/current_platform_position_in_ardrone", problem)
         with self.lock:
             self.seen_at = rospy.get_time()
+            self.detection_delays.append(max(0.0, self.seen_at - msg.header.stamp.to_sec()))
 
     def on_landing_allowed(self, msg):
         with self.lock:
@@ -473,7 +476,8 @@ class TrackingNode:
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in requests, land="land" in requests,
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
-                            vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight)
+                            vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight,
+                            camera_latency=float(np.median(self.detection_delays)) if self.detection_delays else 0.0)
         before = self.machine.state
         out = self.machine.step(inputs)
         if out.send_takeoff:

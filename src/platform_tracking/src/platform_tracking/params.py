@@ -133,6 +133,7 @@ class TrackingParams:
     # horizontal controller
     position_gain: float = spec(1.2, 0.0, 20.0, "1/s")
     along_track_gain: float = spec(2.4, 0.0, 20.0, "1/s")
+    along_track_gain_latency: float = spec(0.26, 0.0, 10.0, "-")
     integral_gain: float = spec(0.5, 0.0, 20.0, "1/s^2")
     integral_speed_limit: float = spec(2.0, 0.0, 20.0, "m/s")
     integral_error_limit: float = spec(2.0, 0.0, 100.0, "m")

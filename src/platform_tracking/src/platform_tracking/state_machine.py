@@ -82,6 +82,7 @@ class Inputs:
     vision_age: Optional[float] = None      # time since the latest pad detection arrived [s]; None: never
     flow_weight: float = 0.0                # how much the drone's own velocity follows the vehicle under it (0 the
                                             # ground .. 1 the vehicle; ardrone/flow_unseen_velocity, flow_surface.py)
+    camera_latency: float = 0.0             # how late the pad's detections arrive after their image [s]
 
 
 @dataclasses.dataclass
@@ -105,6 +106,7 @@ class TrackingStateMachine:
         self.controller = TrackingController(params)
         self._vision_age = None  # of the current step: since the latest detection [s]; None: never
         self._flow_weight = 0.0  # of the current step: how much the drone's own velocity follows the vehicle
+        self._camera_latency = 0.0  # of the current step: how late detections arrive after their image [s]
         self.state = State.LANDED
         self.entered = 0.0                       # time the current state was entered
         self.takeoff_pending = False
@@ -205,7 +207,8 @@ class TrackingStateMachine:
             # The pad not seen: the prediction (GPS alone, metres off after a while) may have the drone right
             # above it while the tilted camera looks elsewhere. Aim the view, not the drone, at the pad.
             drone = drone.viewing(self._height(drone, pad, t))
-        return self.controller.world_velocity(t, drone, pad, accumulate=accumulate, flow_weight=self._flow_weight)
+        return self.controller.world_velocity(t, drone, pad, accumulate=accumulate, flow_weight=self._flow_weight,
+                                             camera_latency=self._camera_latency)
 
     def _searching(self):
         """True while the pad has not been seen for search_view_after (or ever), tracking or descending."""
@@ -218,6 +221,7 @@ class TrackingStateMachine:
         self._out = Outputs(state=self.state)
         t = inputs.time
         self._flow_weight = inputs.flow_weight
+        self._camera_latency = inputs.camera_latency
         self._vision_age = inputs.vision_age
         if inputs.pad is not None:
             self.last_pad = inputs.pad
