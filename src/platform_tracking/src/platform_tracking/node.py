@@ -56,7 +56,7 @@ from .state_machine import Inputs, State, TrackingStateMachine
 
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
-DELAY_SAMPLES = 15         # detections whose capture-to-arrival delay gives the camera latency (a median: robust to one late frame) [-]
+DELAY_SAMPLES = 15         # detections whose arrival-minus-capture median is the camera latency [-]
 WORLD_FRAMES = ("world", "/world", "")
 COMMANDS = ("takeoff", "land", "force_land", "hold")
 BODY_FRAME = "ardrone/base_link"  # the drone's body frame (docs/conventions.md): sonar and relative pad positions
