@@ -188,6 +188,20 @@ def test_tracking_holds_the_nominal_height():
     assert f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30)).command.vz == 0.0
 
 
+def test_tracking_closes_an_along_track_gap_more_gently_the_later_the_camera_sees():
+    """The camera latency of the inputs reaches the controller: a pad 0.3 m ahead along its travel (+x, at the
+    drone's own 1 m/s) is closed at along_track_gain in realistic's 0.1 s, at along_track_gain_latency / 0.2 in
+    harsh's 0.2 s."""
+    commands = {}
+    for latency in (0.1, 0.2):
+        f = tracking_flight()
+        commands[latency] = f.step(drone=drone(vx=1.0), pad=pad(f.t + 1 / 30, x=0.3, vx=1.0),
+                                   camera_latency=latency).command.vx
+    gain_drop = P.along_track_gain - P.along_track_gain_latency / 0.2
+    assert gain_drop > 0.5
+    assert commands[0.1] - commands[0.2] == pytest.approx(gain_drop * 0.3, abs=0.02)
+
+
 def test_tracking_flies_the_cameras_view_centre_over_the_pad_while_the_pad_is_unseen():
     """Tilted 18 deg (body z towards +x, as into a car's air stream), the camera looks 1.3 m behind the drone at
     4 m: while the pad is unseen the command moves the drone forward of the predicted pad until the view is on
