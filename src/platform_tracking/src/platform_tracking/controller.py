@@ -232,7 +232,8 @@ class TrackingController:
                        camera_latency=0.0):
         """Horizontal velocity command in the world frame, as the drone flies it (see the module docstring for
         ``flow_weight``; ``camera_latency``: how late detections arrive after their image). ``accumulate`` False
-        freezes the integral (it still applies: at speed it holds what the drone's own velocity loop falls short by)."""
+        freezes the integral (it still applies: at speed it holds what the drone's own velocity loop falls
+        short by)."""
         p = self.p
         error, relative_velocity = self.errors(t, drone, pad)
         error = error + p.lookahead * relative_velocity

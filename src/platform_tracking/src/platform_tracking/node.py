@@ -321,6 +321,7 @@ class TrackingNode:
         self.landing_allowed = True
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.detection_delays = collections.deque(maxlen=DELAY_SAMPLES)  # arrival minus capture of recent ones [s]
+        self.camera_latency = 0.0     # their median; 0 before the first detection [s]
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -424,6 +425,7 @@ class TrackingNode:
         with self.lock:
             self.seen_at = rospy.get_time()
             self.detection_delays.append(max(0.0, self.seen_at - msg.header.stamp.to_sec()))
+            self.camera_latency = float(np.median(self.detection_delays))
 
     def on_landing_allowed(self, msg):
         with self.lock:
@@ -477,7 +479,7 @@ class TrackingNode:
                             takeoff="takeoff" in requests, land="land" in requests,
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
                             vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight,
-                            camera_latency=float(np.median(self.detection_delays)) if self.detection_delays else 0.0)
+                            camera_latency=self.camera_latency)
         before = self.machine.state
         out = self.machine.step(inputs)
         if out.send_takeoff:
