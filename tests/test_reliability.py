@@ -104,10 +104,12 @@ def recorder_preloads(root_pid, timeout_s=60.0):
     while time.monotonic() < deadline:
         pid = processes.nodes_below([root_pid]).get(RECORDER)
         program = processes.command_line(pid)[:1] if pid is not None else []
-        if [os.path.basename(p) for p in program] == ["record"]:  # rosbag's C++ recorder, not its Python wrapper
+        if [os.path.basename(p) for p in program] == ["record"]:  # rosbag's C++ recorder, not a wrapper
             with open("/proc/%d/maps" % pid) as stream:
                 maps = stream.read()
-            return {lib for lib in ("libjemalloc", "liblanding_loopback_bind") if lib in maps}
+            # Read once the loader has mapped its libraries (the preloaded ones come before roscpp).
+            if "libroscpp" in maps:
+                return {lib for lib in ("libjemalloc", "liblanding_loopback_bind") if lib in maps}
         time.sleep(0.2)
     raise AssertionError("no flight recorder process after %.0f s" % timeout_s)
 

@@ -142,6 +142,25 @@ def test_run_node_turns_a_startup_error_into_a_fatal_message_and_exit_status_2(r
     assert "parameter ~rate_hz is missing" in result.stdout + result.stderr
 
 
+# Ends with exit_promptly while rospy is still up and its last line is still in stdout's buffer (a pipe).
+PROMPT_EXIT = NODE.format(wait="""
+from landing_msgs.rospy_node import exit_promptly
+print("last words")
+exit_promptly(3)""")
+
+
+def test_exit_promptly_shuts_rospy_down_flushes_and_exits_with_the_status(ros_master):
+    proxy, env = ros_master
+    node = subprocess.Popen([sys.executable, "-c", PROMPT_EXIT], env=env, stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    assert node.stdout.readline().startswith("port ")
+    assert node.wait(timeout=60) == 3
+    assert "last words" in node.stdout.read()  # flushed before the process ended (communicate() would skip
+    # what readline() buffered)
+    # rospy shut down first: the node unregistered its publisher (registered before "port") from the master.
+    assert "/burst_listener" not in dict(proxy.getSystemState()[0]).get("/chatter", [])
+
+
 DIRECT = """
 import socket, time
 import rospy

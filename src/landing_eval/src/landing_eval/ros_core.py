@@ -7,7 +7,7 @@ twice (two more Python processes) for two parameters nobody here reads; stopping
 master one after the other, polling each every 0.1 s. On a loaded 2-core machine that was 1-6 s of every
 run's start-up. Here the master starts at once and rosout as soon as the master answers; both are children
 of this process (one process tree; each child in a process group of its own, so that IsolatedCore's SIGINT
-reaches this process, which stops rosout and then the master). A
+reaches this process, which ends rosout and the master with SIGTERM). A
 rosout that dies is started again (roscore's respawn="true"); a master that dies stays dead, as with
 roscore (the graph flies on over its connections). This process ends when both have ended.
 """
@@ -22,7 +22,7 @@ import xmlrpc.client
 from .isolated_ros import signal_on_parent_death
 
 MASTER_WAIT_S = 60.0  # the master answering at most this long after its start, else this process gives up [s]
-STOP_WAIT_S = 10.0    # after SIGINT, each child has this long to end before SIGKILL [s]
+STOP_WAIT_S = 10.0    # after SIGTERM, each child has this long to end before SIGKILL [s]
 
 
 def rosout_executable():
@@ -97,12 +97,14 @@ def main(argv=None):
         if not children:
             break
         if stopping:
-            # rosout first, then the master (as roscore does): stopped together they wait for each other (rosout
-            # unregisters from the master) for 1-4 s. Bounded: SIGKILL STOP_WAIT_S after the SIGINT.
-            order = [c for c in (rosout, master) if c is not None and c.pid in children]
-            if order and order[0].pid not in signalled:
-                signalled.add(order[0].pid)
-                _signal(order[0], signal.SIGINT)
+            # SIGTERM, which neither handles: both end at once. After SIGINT rosout unregistered from the master
+            # (0.25 s) and the master then stopped its XML-RPC server (0.15 s), for nothing: the run is over and
+            # neither keeps anything (rosout writes each line to rosout.log as it comes). Bounded: SIGKILL
+            # STOP_WAIT_S after the signal.
+            for child in (rosout, master):
+                if child is not None and child.pid in children and child.pid not in signalled:
+                    signalled.add(child.pid)
+                    _signal(child, signal.SIGTERM)
             if time.monotonic() - stopping[0] > STOP_WAIT_S:
                 for child in children.values():
                     _signal(child, signal.SIGKILL)

@@ -82,14 +82,18 @@ def launch_arguments(s):
 def recorder_command(bag, split_s=0):
     """(command, environment) of rosbag record of the topics interface/record.launch records (its record_regex, in
     its chunk_kb chunks, with its allocator and settings), started directly: through a second roslaunch it took 0.4 s longer
-    to start and to stop. With ``split_s`` > 0 a new bag every split_s seconds of sim time (NAME_0.bag, NAME_1.bag,
-    ...; see split_bags)."""
+    to start and to stop, through rosrun (a shell script that runs catkin_find) 0.2 s longer to start. With ``split_s``
+    > 0 a new bag every split_s seconds of sim time (NAME_0.bag, NAME_1.bag, ...; see split_bags)."""
     import xml.etree.ElementTree as ElementTree
+    import roslib.packages
     import rospkg
     launch = os.path.join(rospkg.RosPack().get_path("interface"), "launch", "record.launch")
     defaults = {arg.get("name"): arg.get("default") for arg in ElementTree.parse(launch).getroot().iter("arg")}
     split = ["--split", "--duration=%d" % split_s] if split_s > 0 else []
-    return ["rosrun", "rosbag", "record", "--output-name=" + bag] + split + [
+    record = roslib.packages.find_node("rosbag", "record")
+    if not record:
+        raise FileNotFoundError("rosbag's record executable was not found (Debian's package: python3-rosbag; run make)")
+    return [record[0], "--output-name=" + bag] + split + [
         "--lz4", "--chunksize=" + defaults["chunk_kb"], "-e", defaults["record_regex"], "__name:=" + RECORDER], {
         "LD_PRELOAD": defaults["allocator"], "MALLOC_CONF": defaults["allocator_conf"],
         "GLIBC_TUNABLES": defaults["malloc_tunables"]}
@@ -545,17 +549,23 @@ class FlightMonitor:
         result["recorder_deaths"] = self.recorder_deaths
         return result
 
-    def leave_graph(self, timeout=10.0):
-        """rospy's shutdown, bounded: with the master gone a registration still retrying holds rospy's topic lock, and
-        the shutdown waits for it for ever."""
+    def start_leaving_graph(self, timeout=10.0):
+        """rospy's shutdown (0.6 s: it unregisters every topic from the master) in a thread of its own, so that it
+        overlaps the graph's and the recorder's; returns ``finish()``, which waits for it, bounded: with the master
+        gone a registration still retrying holds rospy's topic lock, and the shutdown waits for it for ever."""
         def shut_down():
             self.faults.close()
             self.rospy.signal_shutdown("scenario finished")
         thread = threading.Thread(target=shut_down, name="leave_graph", daemon=True)
         thread.start()
-        thread.join(timeout)
-        if thread.is_alive():
-            self.rospy.logwarn("rospy did not shut down within %.0f s (the master is gone?): leaving it behind", timeout)
+        deadline = time.monotonic() + timeout
+
+        def finish():
+            thread.join(max(0.0, deadline - time.monotonic()))
+            if thread.is_alive():
+                self.rospy.logwarn("rospy did not shut down within %.0f s (the master is gone?): leaving it behind",
+                                   timeout)
+        return finish
 
     def resting_pad_error(self):
         """Horizontal drone-to-pad distance at the latest instant both poses are known for."""
@@ -651,6 +661,15 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
         with contextlib.ExitStack() as stack:
             # The master in a process tree of its own: one roslaunch started would end the whole graph with it.
             core = stack.enter_context(IsolatedCore(os.path.join(out_dir, "core.log")))
+            # Waits for this process to have left the graph, once the launch and the recorder have ended and before
+            # the master stops (the stack unwinds in reverse order).
+            leaving = []
+
+            def left_graph():
+                for finish in leaving:
+                    finish()
+                    step("left_graph")
+            stack.callback(left_graph)
             os.environ["ROS_MASTER_URI"] = core.master_uri
             start_deadline = wall_start + limits["start_up"]
             # The launch starts beside the master and waits for it (roslaunch --wait).
@@ -703,8 +722,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             step("scored")
             if fuzzer is not None:
                 result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
-            monitor.leave_graph()
-            step("left_graph")
+            leaving.append(monitor.start_leaving_graph())
     except Exception as err:  # noqa: BLE001 (whatever went wrong, the run leaves its result and the reason)
         # The graph never came up (or the run could not even start): still a result, with the reason.
         result.update(outcome="aborted", error="%s: %s" % (type(err).__name__, err), touchdown_error_m=None,

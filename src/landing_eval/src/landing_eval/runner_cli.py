@@ -1,7 +1,7 @@
 """`python -m landing_eval.runner_cli SCENARIO --out DIR`: run_scenario for subprocesses of the benchmark."""
-import sys
+from landing_msgs.rospy_node import exit_promptly
 
 from .runner import main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_promptly(main())

@@ -18,10 +18,14 @@ parameters and whose ``tick()`` runs at its rate:
   surplus connection requests and the client retries them after 1 s: the bag then missed the first
   seconds of ground truth and navdata (6 sim-seconds at 6x real time).
 - Prompt exit: rospy.spin() looks for the shutdown every 0.5 s and a sleep on sim time every 0.3 s
-  once the clock has stopped; here both wake up as soon as rospy shuts down.
+  once the clock has stopped; here both wake up as soon as rospy shuts down. A node's script ends with
+  ``exit_promptly(main())`` instead of ``sys.exit(main())``.
 """
 import contextlib
+import logging
+import os
 import socket
+import sys
 import threading
 import warnings
 
@@ -145,3 +149,19 @@ def run_node(name, make_node, startup_errors):
         return 2
     node.spin()
     return 0
+
+
+def exit_promptly(status=0):
+    """End the process with ``status`` (None: 0) once rospy has shut down and every log is flushed, without
+    Python's finalization: it tears down every loaded module and took 0.15 s of CPU per node, 0.3 s of wall time
+    for a graph of 7 Python nodes stopping together on 2 cores. The nodes keep no file open for writing;
+    whatever else must be tidied happens before main() returns."""
+    if not rospy.core.is_shutdown():
+        rospy.signal_shutdown("main() returned")  # (what rospy's own atexit hook would do)
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # closed, or its reader gone
+            pass
+    os._exit(status if isinstance(status, int) else 0 if status is None else 1)
