@@ -10,7 +10,7 @@ import rospy
 import rostest
 from landing_msgs.msg import Touchdown
 from nav_msgs.msg import Odometry
-from std_msgs.msg import String
+from std_msgs.msg import Float64, String
 from landing_msgs import testing
 
 WALL_TIMEOUT = 300.0
@@ -29,6 +29,8 @@ class FlightTest(unittest.TestCase):
                          lambda m: truth.update({round(m.header.stamp.to_sec(), 3): m.pose.pose.position}),
                          queue_size=200)
         rospy.Subscriber("ardrone/touchdown", Touchdown, touchdowns.append)
+        latencies = []
+        rospy.Subscriber("platform_tracking/camera_latency", Float64, lambda m: latencies.append(m.data))
         command = rospy.Publisher("platform_tracking/command", String, queue_size=1, latch=True)
         wait_for(lambda: states and estimates and truth and rospy.get_time() > 1.0,
                  "the tracker state, the estimate and 1 s of sim time")
@@ -53,6 +55,10 @@ class FlightTest(unittest.TestCase):
         self.assertGreater(len(errors), 0.3 * len(estimates))
         self.assertLess(math.sqrt(sum(e * e for e in errors) / len(errors)), 0.2)
         self.assertLess(max(errors), 0.5)
+        # The camera latency it measured: the stand-in's detections arrive ~latency late, plus up to a 30 Hz tick.
+        latency = rospy.get_param("/pipeline_stand_in/latency")
+        self.assertGreater(len(latencies), 5)
+        self.assertTrue(latency - 0.005 <= latencies[-1] <= latency + 2.0 / 30.0, latencies[-5:])
 
 
 if __name__ == "__main__":

@@ -46,7 +46,7 @@ from landing_msgs.msg import Altimeter, Navdata
 from landing_msgs.rospy_node import direct_publisher, init_node, spin
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
-from std_msgs.msg import Bool, Empty, String
+from std_msgs.msg import Bool, Empty, Float64, String
 
 from .controller import DroneState, PadPrediction
 from .estimator import DroneEstimator
@@ -57,6 +57,7 @@ from .state_machine import Inputs, State, TrackingStateMachine
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
 DELAY_SAMPLES = 15         # detections whose arrival-minus-capture median is the camera latency [-]
+LATENCY_PERIOD = 1.0       # how often that latency is published on platform_tracking/camera_latency [s of sim time]
 WORLD_FRAMES = ("world", "/world", "")
 COMMANDS = ("takeoff", "land", "force_land", "hold")
 BODY_FRAME = "ardrone/base_link"  # the drone's body frame (docs/conventions.md): sonar and relative pad positions
@@ -322,6 +323,7 @@ class TrackingNode:
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.detection_delays = collections.deque(maxlen=DELAY_SAMPLES)  # arrival minus capture of recent ones [s]
         self.camera_latency = 0.0     # their median; 0 before the first detection [s]
+        self.latency_published_at = None  # sim time it was last published
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -330,6 +332,8 @@ class TrackingNode:
         self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
         self.pub_state = rospy.Publisher("platform_tracking/state", String, queue_size=1, latch=True)
         self.pub_target = direct_publisher("platform_tracking/target", PointStamped)
+        # What the link costs, for the operator and the bag: the along-track gain is bounded by it.
+        self.pub_latency = rospy.Publisher("platform_tracking/camera_latency", Float64, queue_size=1, latch=True)
         rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("kalman_prediction_path", Path, self.on_path, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5, tcp_nodelay=True)
@@ -426,6 +430,9 @@ class TrackingNode:
             self.seen_at = rospy.get_time()
             self.detection_delays.append(max(0.0, self.seen_at - msg.header.stamp.to_sec()))
             self.camera_latency = float(np.median(self.detection_delays))
+            if self.latency_published_at is None or self.seen_at - self.latency_published_at >= LATENCY_PERIOD:
+                self.latency_published_at = self.seen_at
+                self.pub_latency.publish(Float64(data=self.camera_latency))
 
     def on_landing_allowed(self, msg):
         with self.lock:
