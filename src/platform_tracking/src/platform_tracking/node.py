@@ -523,6 +523,7 @@ class TrackingNode:
                 with self.lock:
                     self.machine = TrackingStateMachine(self.params, self.machine.logger)
                     self.estimate = self.path = self.pad_odom = self.prediction = None
+                    self.latency_published_at = None
                 self.pub_state.publish(String(data=State.LANDED.value))
             except rospy.ROSInterruptException:
                 break
