@@ -4,6 +4,7 @@ update; Start, then Landing Mode: the tracker leaves LANDED; the battery set to 
 emergency coordinates appear within 1 s of sim time; a station on a non-loopback address refuses requests
 without its token (401). A screenshot goes to logs/station_browser.png."""
 import os
+import re
 import time
 import unittest
 import urllib.error
@@ -101,6 +102,11 @@ class StationBrowserTest(unittest.TestCase):
         wait_for(lambda: self.page_state()["screen"] == "landing", "the Landing menu")
         wait_for(lambda: self.driver.find_element(By.ID, "landing-state").text in ("TAKING_OFF", "TRACKING"),
                  "the tracker state on the Landing menu")
+        # The camera link's delay as the tracker measures it, once it has seen the pad.
+        delay = wait_for(lambda: re.fullmatch(r"\d+\.\d\d s",
+                                              self.driver.find_element(By.ID, "landing-camera-latency").text),
+                         "the camera delay on the Landing menu")
+        rospy.loginfo("camera delay on the Landing menu: %s", delay.group(0))
 
     def test_3_battery_at_10_percent_from_the_page_shows_the_emergency_coordinates(self):
         Select(self.driver.find_element(By.ID, "condition-name")).select_by_value("drone_battery")

@@ -191,10 +191,12 @@ def test_state_follows_the_thesis_menus_and_counts_down():
     state = model.state()
     assert state["screen"] == "flight_management" and state["countdown"] == 23.0
     model.console.mode = "landing"
+    model.console.camera_latency = 0.1234
     model.console.warning = {"id": 2, "message": "strong wind", "options": ["manual", "emergency", "continue"],
                              "deadline": 20.0}
     state = model.state()
     assert state["screen"] == "landing" and state["countdown"] is None
+    assert state["landing"]["camera_latency"] == 0.123
     assert state["warning"] == {"id": 2, "message": "strong wind", "options": ["manual", "emergency", "continue"],
                                 "time_left": 8.0}
     model.on_decision({"t": 13.0, "condition": "drone_battery_critical", "flag": 1, "action": "emergency_landing",

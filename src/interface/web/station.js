@@ -155,6 +155,7 @@ function renderLanding(state) {
   $("landing-state").textContent = state.tracker || "-";
   $("landing-error").textContent = fmt(state.landing.error, 2, "m");
   $("landing-height").textContent = fmt(state.landing.height, 2, "m");
+  $("landing-camera-latency").textContent = fmt(state.landing.camera_latency, 2, "s");
   const result = state.landing.result || "";
   $("landing-result").textContent = result;
   $("landing-result").className = "result " + (result.startsWith("Landing performed successfully") ? "success" :

@@ -73,6 +73,7 @@ class ConsoleModel:
         self.drone_xy = None               # the drone's own position estimate (ardrone/odom_estimate) [m]
         self.target_xy = None              # where the tracker aims (platform_tracking/target) [m]
         self.height = None                 # sonar: feet above the surface below (the pad when over it) [m]
+        self.camera_latency = None         # the camera link's delay as the tracker measures it [s]
         self.last_decision = {}            # condition -> latest decision
         self.log = []                      # recent messages, newest last
 

@@ -141,7 +141,7 @@ class StationModel:
             "countdown": None if countdown is None else round(countdown, 1),
             "warning": self.warning(), "emergency": emergency,
             "landing": {"error": _rounded(console.tracking_error()), "height": _rounded(console.height),
-                        "result": console.landing_result},
+                        "camera_latency": _rounded(console.camera_latency, 3), "result": console.landing_result},
             "drone": _pose(self.drone, "x", "y", "z", "yaw", "speed"),
             "vehicle": _pose(self.vehicle, "x", "y", "yaw"),
             "pad": None if self.pad is None else [_rounded(self.pad[0]), _rounded(self.pad[1])],

@@ -28,7 +28,7 @@ from landing_msgs.msg import Altimeter, PositionXYCommand
 from landing_msgs.rospy_node import init_node
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Range
-from std_msgs.msg import String
+from std_msgs.msg import Float64, String
 
 from .conditions import ConditionTableError, load_table
 from .console import SENSOR_TOPICS, SENSOR_TIMEOUT_S
@@ -41,6 +41,7 @@ from .station_server import StationServer
 from .supervisor import Mode
 
 MODES = tuple(mode.value for mode in Mode)
+MAX_CAMERA_LATENCY_S = 10.0  # a camera latency beyond this is garbage, not a link [s]
 TRACKER_STATES = tuple(state.value for state in TrackerState)
 
 
@@ -213,6 +214,10 @@ class StationNode:
         sub("platform_tracking/target", PointStamped, checked(
             "platform_tracking/target", lambda m: _header_problem(m) or numbers_problem(
                 MAX_POSITION_M, point=(m.point.x, m.point.y)), setter(target_xy=translate_point)), queue_size=1)
+        sub("platform_tracking/camera_latency", Float64, checked(
+            "platform_tracking/camera_latency", lambda m: numbers_problem(MAX_CAMERA_LATENCY_S, latency=m.data) or (
+                ("out of range", "latency is %s s" % m.data) if m.data < 0.0 else None),
+            setter(camera_latency=lambda m: m.data)), queue_size=1)
         sub("emergency/position", PositionXYCommand, checked(
             "emergency/position", lambda m: numbers_problem(MAX_POSITION_M, position=(m.x, m.y)),
             setter(emergency_position=translate_point)), queue_size=1)
