@@ -103,7 +103,9 @@ def test_countdown_to_the_auto_take_off_and_the_landing_menu():
     assert model.auto_takeoff_in(40.0) is None
     model.mode, model.tracker_state = "landing", "LANDING"
     model.drone_xy, model.target_xy, model.height = (1.0, 2.0), (1.3, 2.4), 0.8
-    assert model.landing_lines() == ["tracker LANDING   error 0.50 m   height 0.80 m"]
+    assert model.landing_lines() == ["tracker LANDING   error 0.50 m   height 0.80 m   camera delay -"]
+    model.camera_latency = 0.104
+    assert model.landing_lines() == ["tracker LANDING   error 0.50 m   height 0.80 m   camera delay 0.10 s"]
     model.on_decision({"t": 22.1, "condition": "flight", "action": "landed", "flag": None,
                        "reason": "Landing performed successfully: on the pad, 0.08 m from its centre"})
     model.mode, model.tracker_state = "landed", "LANDED"

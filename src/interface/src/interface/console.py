@@ -86,7 +86,7 @@ class ConsoleNode:
         from landing_msgs.msg import Navdata, PositionXYCommand
         from nav_msgs.msg import Odometry
         from sensor_msgs.msg import Range
-        from std_msgs.msg import String
+        from std_msgs.msg import Float64, String
         self.rospy, self.model, self.plain = rospy, model, plain
         self.teleop = teleop  # ardrone_moves KeyboardTeleop for Manual Control, or None
         self.lock = threading.Lock()
@@ -107,6 +107,8 @@ class ConsoleNode:
         rospy.Subscriber("platform_tracking/target", PointStamped,
                          lambda m: self._set(target_xy=(m.point.x, m.point.y)), queue_size=1)
         rospy.Subscriber("ardrone/sonar_height", Range, lambda m: self._set(height=m.range), queue_size=1)
+        rospy.Subscriber("platform_tracking/camera_latency", Float64, lambda m: self._set(
+            camera_latency=m.data if math.isfinite(m.data) and m.data >= 0.0 else None), queue_size=1)
         if teleop is not None:
             from ardrone_moves.node import DroneCommands
             self.drone_commands = DroneCommands("console", self.publisher)

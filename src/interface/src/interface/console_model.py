@@ -116,13 +116,14 @@ class ConsoleModel:
         return math.hypot(self.target_xy[0] - self.drone_xy[0], self.target_xy[1] - self.drone_xy[1])
 
     def landing_lines(self):
-        """The Landing menu (thesis figure 3.4): tracker state, error, height, then the result."""
+        """The Landing menu (thesis figure 3.4): tracker state, error, height, the camera link's delay, then the
+        result."""
         if self.mode not in ("landing", "landed"):
             return []
-        error, height = self.tracking_error(), self.height
-        lines = ["tracker %s   error %s   height %s" % (
+        error, height, delay = self.tracking_error(), self.height, self.camera_latency
+        lines = ["tracker %s   error %s   height %s   camera delay %s" % (
             self.tracker_state or "-", "-" if error is None else "%.2f m" % error,
-            "-" if height is None else "%.2f m" % height)]
+            "-" if height is None else "%.2f m" % height, "-" if delay is None else "%.2f s" % delay)]
         if self.landing_result:
             lines.append(self.landing_result)
         return lines
