@@ -48,6 +48,7 @@ from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, Float64, String
 
+from .camera_latency import CameraLatency
 from .controller import DroneState, PadPrediction
 from .estimator import DroneEstimator
 from .flow_surface import FlowSurface, WeightForecast
@@ -321,9 +322,7 @@ class TrackingNode:
         self.requests = []            # operator requests since the last step, in arrival order
         self.landing_allowed = True
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
-        self.detection_delays = collections.deque(maxlen=DELAY_SAMPLES)  # arrival minus capture of recent ones [s]
-        self.camera_latency = 0.0     # their median; 0 before the first detection [s]
-        self.latency_published_at = None  # sim time it was last published
+        self.camera_latency = CameraLatency(DELAY_SAMPLES, LATENCY_PERIOD)  # of the detections' arrival
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -428,11 +427,9 @@ class TrackingNode:
             return self.rejections.reject("platform/current_platform_position_in_ardrone", problem)
         with self.lock:
             self.seen_at = rospy.get_time()
-            self.detection_delays.append(max(0.0, self.seen_at - msg.header.stamp.to_sec()))
-            self.camera_latency = float(np.median(self.detection_delays))
-            if self.latency_published_at is None or self.seen_at - self.latency_published_at >= LATENCY_PERIOD:
-                self.latency_published_at = self.seen_at
-                self.pub_latency.publish(Float64(data=self.camera_latency))
+            self.camera_latency.add(self.seen_at, msg.header.stamp.to_sec())
+            if self.camera_latency.report_due(self.seen_at):
+                self.pub_latency.publish(Float64(data=self.camera_latency.value))
 
     def on_landing_allowed(self, msg):
         with self.lock:
@@ -486,7 +483,7 @@ class TrackingNode:
                             takeoff="takeoff" in requests, land="land" in requests,
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
                             vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight,
-                            camera_latency=self.camera_latency)
+                            camera_latency=self.camera_latency.value)
         before = self.machine.state
         out = self.machine.step(inputs)
         if out.send_takeoff:
@@ -523,7 +520,6 @@ class TrackingNode:
                 with self.lock:
                     self.machine = TrackingStateMachine(self.params, self.machine.logger)
                     self.estimate = self.path = self.pad_odom = self.prediction = None
-                    self.latency_published_at = None
                 self.pub_state.publish(String(data=State.LANDED.value))
             except rospy.ROSInterruptException:
                 break
