@@ -204,14 +204,19 @@ class Autopilot:
             self.yaw_ref = yaw
         self.yaw_ref = yaw + max(-0.5, min(0.5, wrap_angle(self.yaw_ref + yaw_rate * dt - yaw)))
 
-        # Geometric attitude control (Lee et al.): desired body z along the thrust vector.
+        # Geometric attitude control (Lee et al.): desired body z along the thrust vector. The desired body x
+        # lies in the vertical plane of the yaw reference (y_c x d3, as PX4 builds it), so that the heading, the
+        # yaw of the yaw-pitch-roll angles the AR.Drone's firmware holds, stays put whatever the tilt. Lee's own
+        # choice (b1c projected onto the tilted plane) turned the heading by about -pitch x roll: at 15 m/s,
+        # rolling for a 2 m/s side step swung it +-0.1 rad, and a heading-frame command sent a link's delay
+        # earlier then pointed 1.5 m/s off across the road.
         norm = math.sqrt(fx * fx + fy * fy + fz * fz)
         d3 = (fx / norm, fy / norm, fz / norm)
-        b1c = (math.cos(self.yaw_ref), math.sin(self.yaw_ref), 0.0)
-        d2 = _cross(d3, b1c)
-        n2 = math.sqrt(_dot(d2, d2))
-        d2 = (d2[0] / n2, d2[1] / n2, d2[2] / n2)
-        d1 = _cross(d2, d3)
+        y_c = (-math.sin(self.yaw_ref), math.cos(self.yaw_ref), 0.0)
+        d1 = _cross(y_c, d3)
+        n1 = math.sqrt(_dot(d1, d1))
+        d1 = (d1[0] / n1, d1[1] / n1, d1[2] / n1)
+        d2 = _cross(d3, d1)
         # e_R = vee(Rd^T R - R^T Rd) / 2, written out entry by entry.
         e_rot = (0.5 * (_dot(d3, r2) - _dot(r3, d2)), 0.5 * (_dot(d1, r3) - _dot(r1, d3)),
                  0.5 * (_dot(d2, r1) - _dot(r2, d1)))
