@@ -143,6 +143,26 @@ def test_commands_are_in_the_heading_frame_and_capped_at_max_speed():
     assert velocity[1] > 4.0  # forward after a left turn is +y
 
 
+def test_the_heading_holds_while_the_drone_rolls_at_car_speed():
+    """Pitched 15 deg forward at 15 m/s, rolling to and fro for +-2 m/s side steps: the heading (the yaw of the
+    yaw-pitch-roll angles, the frame of cmd_vel) moves by less than 0.02 rad. The attitude built from the yaw
+    reference projected onto the tilted plane swung it by +-0.11 rad."""
+    sim = make_sim(noise={"enabled": False}, drone={"max_horizontal_speed": 20.0})
+    airborne(sim)
+    run(sim, 8.0, command=(15.0, 0.0, 0.0, 0.0))
+
+    def heading():
+        w, x, y, z = sim.drone_pose()[1]
+        return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+    start, swing = heading(), []
+    for k in range(60):
+        run(sim, 0.05, command=(15.0, 2.0 if (k // 10) % 2 else -2.0, 0.0, 0.0))
+        swing.append(heading() - start)
+    assert sim.drone_velocity()[0][0] > 14.0
+    assert max(np.abs(swing)) < 0.02, (min(swing), max(swing))
+
+
 def test_absurd_commands_are_refused_and_the_drone_holds():
     sim = make_sim()
     airborne(sim)
@@ -219,6 +239,21 @@ def test_falling_with_an_empty_battery_is_a_crash():
     sim.set_conditions(battery=50.0)
     sim.reset()
     assert sim.autopilot.mode == FlightMode.LANDED
+
+
+def test_the_pads_ground_truth_is_where_the_vehicle_is_now_at_car_speed():
+    """Positions MuJoCo derives from the joints (the pad's site, the scene the camera renders) belong to the
+    same instant as the joints themselves: after a plain mj_step they lagged by a step, 6 cm at 15 m/s."""
+    sim = make_sim("car")
+    for _ in range(60):  # the vehicle stops without a command every command_timeout
+        sim.set_vehicle_command(15.0, 0.0)
+        run(sim, 0.1)
+    assert sim.vehicle_velocity()[0] > 14.0
+    x, y, yaw = sim.vehicle_pose()
+    offset = sim.pad_offset_in_vehicle()
+    expected = (x + math.cos(yaw) * offset[0] - math.sin(yaw) * offset[1],
+                y + math.sin(yaw) * offset[0] + math.cos(yaw) * offset[1])
+    assert sim.pad_position()[:2] == pytest.approx(expected, abs=0.002)
 
 
 def test_touchdown_classification_limits():
