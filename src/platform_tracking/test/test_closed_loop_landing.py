@@ -33,12 +33,19 @@ def test_takes_off_tracks_and_lands_on_the_moving_pad(vehicle, path, speed):
 
 
 def test_the_estimator_stays_accurate_in_flight_without_ground_truth():
+    """Where the drone is (GPS-limited), and above all how it moves over a camera latency: the pad is placed with
+    the published position and tracked against it. Publishing the GPS corrections over 3 s instead of 0.3 s costs
+    a few centimetres of the first (rms 0.10 -> 0.13 m here) and a third of the second (std 0.012 -> 0.008 m)."""
     result = run_landing("summit_xl", "circle", 2.0, seed=1)
     records = result["records"]
     flying = records["t"] > 5.0
     error = records["estimate"][flying] - records["drone"][flying]
-    assert np.sqrt(np.mean(np.hypot(error[:, 0], error[:, 1]) ** 2)) < 0.12
+    assert np.sqrt(np.mean(np.hypot(error[:, 0], error[:, 1]) ** 2)) < 0.15
     assert np.abs(error[:, 2]).max() < 0.1
+    t = records["t"][flying]
+    earlier = np.stack([np.interp(t[t > t[0] + 0.2] - 0.2, t, error[:, i]) for i in (0, 1)], axis=1)
+    change = error[t > t[0] + 0.2, :2] - earlier
+    assert change.std(axis=0).max() < 0.009
 
 
 def test_a_lost_pad_is_relocated_and_the_landing_completes():

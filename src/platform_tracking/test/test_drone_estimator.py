@@ -224,6 +224,47 @@ def test_gps_position_step_is_followed_smoothly():
     assert steps.max() < 0.01
 
 
+def test_the_published_position_moves_with_the_drone_between_gps_fixes():
+    """The pad is placed with the published position and tracked against it: what matters is how its error changes
+    over a camera latency (0.2 s), which the GPS noise's corrections drive. Published over correction_smoothing_time
+    (3 s) they add less than 5 mm to it; over 0.3 s, 9 mm."""
+    def change_over_latency(smoothing_time):
+        est = DroneEstimator(EstimatorParams(correction_smoothing_time=smoothing_time))
+        times, truth, estimates, _ = fly(circle, 60.0, seed=3, estimator=est, gps_velocity=True)
+        error = (estimates - truth)[times > 20.0, :2]
+        samples = 20  # at 100 Hz
+        return (error[samples:] - error[:-samples]).std(axis=0).max()
+
+    assert change_over_latency(0.3) > 0.008
+    assert change_over_latency(EstimatorParams().correction_smoothing_time) < 0.005
+
+
+def test_the_first_fixes_after_a_gps_outage_move_the_published_position_no_faster_than_correction_max_speed():
+    """Ten seconds without GPS at 10 m/s, and the GPS error moved 1.5 m meanwhile: the filter takes the first fixes
+    at once (its uncertainty grew with the flow's scale), but the pad is placed with the published position, which
+    takes the step at correction_max_speed (0.2 m/s) on top of the drone's motion."""
+    def fast_circle(t):
+        return circle(t, radius=60.0, speed=10.0)
+
+    def after_the_outage(max_speed, smoothing_time):
+        est = DroneEstimator(EstimatorParams(correction_max_speed=max_speed, correction_smoothing_time=smoothing_time))
+        times, truth, estimates, _ = fly(fast_circle, 50.0, seed=1, flow_bias=(0.3, 0.0), gps_outage=(20.0, 30.0),
+                                         gps_offset=(29.0, np.array([1.5, 0.0])), estimator=est)
+        truth[times >= 29.0, 0] += 1.5   # where the GPS now says it is
+        velocity = np.array([fast_circle(t)[1][:2] for t in times])
+        apparent = np.diff(estimates[:, :2], axis=0) / np.diff(times)[:, None] - velocity[1:]
+        window = (times[1:] >= 30.0) & (times[1:] < 33.0)
+        return np.hypot(*apparent[window].T).max(), horizontal_error(truth, estimates, times=times), times
+
+    unlimited, _, _ = after_the_outage(100.0, 0.1)
+    assert unlimited > 2.0                         # the filter's own step
+    limited, error, times = after_the_outage(EstimatorParams().correction_max_speed,
+                                             EstimatorParams().correction_smoothing_time)
+    assert limited < 0.6                           # 0.2 m/s plus the flow's own velocity error
+    assert error[(times >= 30.0) & (times < 31.0)].min() > 1.0
+    assert error[times >= 45.0].mean() < 0.3       # ...and it gets there
+
+
 def test_a_wild_gps_fix_is_rejected_and_persistent_disagreement_reanchors():
     est = DroneEstimator(EstimatorParams(gps_max_rejections=3))
     est.imu(0.0, (1.0, 0.0, 0.0, 0.0))

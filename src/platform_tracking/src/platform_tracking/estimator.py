@@ -333,8 +333,7 @@ class DroneEstimator:
         else:
             self.horizontal.predict_world(dt, self._velocity(self.time))
         self.vertical.predict(dt, self._velocity(self.time)[2])
-        self.pending_correction *= math.exp(-dt / self.p.correction_smoothing_time) \
-            if self.p.correction_smoothing_time > 0.0 else 0.0
+        self.pending_correction = self._correction_left(dt)
         self.time = t
         if self.ready:
             self.history.append((t, self._position_now(), self._velocity(t)))
@@ -358,6 +357,20 @@ class DroneEstimator:
         f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
         return p0 + f * (p1 - p0), v0 + f * (v1 - v0)
 
+    def _correction_left(self, dt):
+        """The part of the pending correction not yet published ``dt`` from now. A measurement update moves the
+        filter state at once; the published position takes that step over correction_smoothing_time, so a
+        consumer differentiating it sees no jump, and horizontally no faster than correction_max_speed: the first
+        GPS fix after a dropout moved the filter 1.5 m, and the pad's position, placed from the camera with the
+        published one, stayed where it was, so the pad seemed to leap away from the drone (harsh)."""
+        smoothing = self.p.correction_smoothing_time
+        left = self.pending_correction * (math.exp(-dt / smoothing) if smoothing > 0.0 else 0.0)
+        passed = self.pending_correction[:2] - left[:2]
+        distance, limit = float(np.hypot(*passed)), self.p.correction_max_speed * dt
+        if distance > limit:
+            left[:2] = self.pending_correction[:2] - passed * (limit / distance)
+        return left
+
     def estimate(self, t=None):
         """The estimate moved to ``t`` (default: the latest measurement time) with the current velocity,
         also backwards: the sensors arrive on separate threads, so the filter may already be a sample
@@ -369,10 +382,7 @@ class DroneEstimator:
         velocity = self._velocity(self.time)
         position = np.array([self.horizontal.x[0] + velocity[0] * dt, self.horizontal.x[1] + velocity[1] * dt,
                              self.vertical.position_at(dt, velocity[2])])
-        # A measurement update moves the filter state at once; the published position takes that
-        # step over correction_smoothing_time, so a consumer differentiating it sees no jump.
-        smoothing = self.p.correction_smoothing_time
-        position -= self.pending_correction * (math.exp(-max(0.0, dt) / smoothing) if smoothing > 0.0 else 0.0)
+        position -= self._correction_left(max(0.0, dt))
         variance = np.array([self.horizontal.P[0, 0], self.horizontal.P[1, 1], self.vertical.var])
         return Estimate(t, position, velocity, tuple(self.orientation), self.yaw, variance)
 
