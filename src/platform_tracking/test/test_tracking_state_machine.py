@@ -333,6 +333,26 @@ def test_landing_stops_descending_while_the_error_or_relative_speed_is_too_large
     assert out.command.vz == 0.0
 
 
+def test_a_landing_hold_keeps_the_lowest_height_since_the_last_climb_against_the_firmwares_drift():
+    """Holding is a height hold on the measured height, not a zero climb rate: the firmware holds its own altitude
+    estimate, which drifts with its accelerometer's bias. Short descents between holds do not reset it upwards."""
+    f = landing_flight()
+    out = f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=0.4))   # outside the descent cone: hold at 2.0 m
+    assert out.command.vz == 0.0
+    out = f.step(drone=drone(height=2.3), pad=pad(f.t + 1 / 30, x=0.4))   # the drone rose 0.3 m meanwhile
+    assert out.command.vz == pytest.approx(-0.3 * P.height_gain)
+    out = f.step(drone=drone(height=1.9), pad=pad(f.t + 1 / 30, x=0.4))   # lower: held there from now on
+    assert out.command.vz == 0.0
+    out = f.step(drone=drone(height=2.2), pad=pad(f.t + 1 / 30))            # on target: a short descent...
+    assert out.command.vz == pytest.approx(-P.landing_descent_rate)
+    out = f.step(drone=drone(height=2.2), pad=pad(f.t + 1 / 30, x=0.4))   # ...and the hold is still at 1.9 m
+    assert out.command.vz == pytest.approx(-0.3 * P.height_gain)
+    out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30, x=P.hold_max_error + P.hold_error_per_metre + 0.1))
+    assert out.command.vz == pytest.approx(P.retry_climb_rate)              # a deliberate climb...
+    out = f.step(drone=drone(height=1.6), pad=pad(f.t + 1 / 30, x=0.4))   # ...and the hold begins where it ended
+    assert out.command.vz == 0.0
+
+
 def test_landing_descends_on_through_the_flows_blend_over_a_fast_vehicle():
     """Where the drone's own velocity half follows the vehicle (flow weight 0.1-0.9) over a car, an error that
     would hold the height elsewhere does not: holding there only lets it grow."""

@@ -121,6 +121,7 @@ class TrackingStateMachine:
         self.retrying = False
         self.climbing = False
         self.blind_since_logged = False
+        self.held_height = None                  # height a LANDING hold keeps: the lowest since the last climb
         self.retries = 0
         # TAKING_OFF
         self.takeoff_resends = 0
@@ -152,6 +153,7 @@ class TrackingStateMachine:
         self.retrying = False
         self.climbing = False
         self.blind_since_logged = False
+        self.held_height = None
         self.at_gate_since = None
         self.ready_since = None
         self.saw_landing_nav = False
@@ -440,10 +442,16 @@ class TrackingStateMachine:
             self._event("error %.2f m > %.2f m at %.2f m: climbing to keep the pad in view" % (
                 distance, climb_error, height))
         self.climbing = climbing
-        if self.retrying or climbing:
+        # A hold keeps the lowest height reached since the last deliberate climb. A zero climb rate would leave the
+        # height to the firmware's own altitude estimate, whose accelerometer bias let the drone rise 0.1-0.25 m/s
+        # in harsh; and a hold that began afresh after each short descent ratcheted it up by what it drifted.
+        deliberate_climb = self.retrying or climbing or (not seen and height < p.retry_height)
+        self.held_height = None if deliberate_climb else \
+            height if self.held_height is None else min(self.held_height, height)
+        if deliberate_climb:
             vz = p.retry_climb_rate
         elif not seen:
-            vz = p.retry_climb_rate if height < p.retry_height else 0.0
+            vz = self._hold_height(height)
         elif distance <= p.descend_max_error and relative_speed <= p.descend_max_relative_speed and not at_gate:
             vz = -p.landing_descent_rate if height > p.gate_height + 0.1 else \
                 climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
@@ -455,8 +463,12 @@ class TrackingStateMachine:
             # the error grow; below, the flow sees the vehicle alone and the drone flies relative to it.
             vz = -p.blend_descent_rate
         else:
-            vz = 0.0  # outside the descent cone: hold the height, let the tracking catch up
+            vz = self._hold_height(height)  # outside the descent cone: hold, let the tracking catch up
         self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
+
+    def _hold_height(self, height):
+        """Climb rate back to the held height."""
+        return climb_rate_towards(height, self.held_height, self.p, limit=self.p.landing_descent_rate)
 
     def _seen_within(self, inp, pad, max_age):
         """The pad seen at most ``max_age`` ago; over a fast vehicle whose texture the drone's flow follows alone
