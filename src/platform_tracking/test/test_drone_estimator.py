@@ -17,9 +17,10 @@ def yaw_quaternion(yaw):
 
 
 def fly(trajectory, seconds, seed=0, flow_bias=(0.0, 0.0), gps_outage=None, gps_offset=None, ground=0.0,
-        estimator=None, dt=0.002, gps_velocity=False, accelerometer=False):
+        estimator=None, dt=0.002, gps_velocity=False, accelerometer=False, yaw_drift=0.0):
     """Feed ``trajectory(t) -> (position (3,), velocity (3,), yaw)`` through the sensors at their
-    rates (with ``accelerometer`` the IMU's specific force too, the drone level); returns (times, true
+    rates (with ``accelerometer`` the IMU's specific force too, the drone level; ``yaw_drift`` [rad] added to the
+    yaw the IMU reports, the flow staying in the drone's true heading frame); returns (times, true
     positions, estimated positions, estimator) sampled at 100 Hz."""
     rng = np.random.default_rng(seed)
     est = estimator or DroneEstimator(EstimatorParams())
@@ -52,7 +53,7 @@ def fly(trajectory, seconds, seed=0, flow_bias=(0.0, 0.0), gps_outage=None, gps_
             if accelerometer:
                 acceleration = (np.asarray(trajectory(t + 1e-3)[1]) - np.asarray(velocity)) / 1e-3
                 force = (*world_to_heading(acceleration[0], acceleration[1], yaw), 9.81 + acceleration[2])
-            est.imu(t, yaw_quaternion(yaw), specific_force=force)
+            est.imu(t, yaw_quaternion(yaw + yaw_drift), specific_force=force)
             e = est.estimate(t)
             if e is not None:
                 times.append(t)
@@ -177,6 +178,23 @@ def test_the_flow_scale_and_the_imu_yaw_drift_are_learnt_from_gps_velocity():
     assert c == pytest.approx(math.sin(drift) / 1.06, abs=0.015)
     error = horizontal_error(truth, estimates, after=20.0, times=times)
     assert error.max() < 0.25
+
+
+def test_the_published_heading_is_the_imus_yaw_less_the_drift_the_flow_has_learnt():
+    """The IMU's yaw drifted 0.08 rad (no magnetometer): the flow (in the true heading frame) against the GPS
+    velocity tells the turn, and the published orientation carries the true heading, which the tracker turns
+    its commands into the heading frame with (at 10 m/s, 0.08 rad is 0.8 m/s across the road). Roll and pitch
+    are the IMU's; a re-anchoring to GPS keeps what was learnt."""
+    def straight(t):
+        return (10.0 * t, 0.0, 4.0), (10.0, 0.0, 0.0), 0.3
+
+    times, _, _, est = fly(straight, 40.0, seed=6, gps_velocity=True, yaw_drift=0.08)
+    estimate = est.estimate()
+    assert est.yaw == pytest.approx(0.38, abs=1e-6)              # what the IMU says
+    assert estimate.yaw == pytest.approx(0.3, abs=0.01)          # what is published
+    assert yaw_from_quaternion(*estimate.orientation) == pytest.approx(estimate.yaw, abs=1e-9)
+    est.horizontal.reanchor(est.horizontal.x[:2] + 5.0, 0.09)
+    assert est.estimate().yaw == pytest.approx(0.3, abs=0.01)
 
 
 def test_gps_outage_dead_reckons_on_the_flow_then_recovers():
@@ -393,6 +411,22 @@ def test_inertial_velocity_follows_a_trusted_reference_and_coasts_through_an_unt
     filt.accelerate(t + 1.0, (1.0, 0.0))  # a gap of a second is not integrated across...
     assert filt.velocity[0] == pytest.approx(5.0, abs=0.3)
     assert filt.correct(t + 2.0, (7.0, 0.0), 5.0) == pytest.approx((7.0, 0.0))  # ...nor trusted: the reading
+
+
+def test_a_late_reading_is_compared_with_the_inertial_velocity_of_its_own_instant():
+    """Navdata comes a link's delay after the IMU has carried the velocity on (harsh: a sample later). Accelerating
+    at 3 m/s^2 with each reading 0.04 s older than the latest acceleration, the velocity keeps up with the truth; pulled
+    towards the reading as if it were current it lagged 0.12 m/s behind (0.04 s), and the position with it."""
+    from platform_tracking.estimator import InertialVelocity
+    filt = InertialVelocity(gain=20.0, reference_std=0.5)
+    filt.correct(0.0, (0.0, 0.0), 0.0)
+    t = 0.0
+    for _ in range(50):  # 2 s at 25 Hz
+        t += 0.04
+        filt.accelerate(t, (3.0, 0.0))
+        filt.correct(t - 0.04, (3.0 * (t - 0.04), 0.0), 0.0)
+    assert filt.velocity[0] == pytest.approx(3.0 * t, abs=0.02)
+    assert filt.velocity_at(t - 0.04)[0] == pytest.approx(3.0 * (t - 0.04), abs=0.02)
 
 
 def test_the_accelerometer_turned_into_the_world_drives_the_inertial_velocity():

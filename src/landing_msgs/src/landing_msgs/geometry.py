@@ -15,3 +15,11 @@ def euler_from_quaternion(w, x, y, z):
 def yaw_from_quaternion(w, x, y, z):
     """Heading [rad] of the unit quaternion (w, x, y, z): the rotation about world z."""
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def turned_about_world_z(quaternion, angle):
+    """The unit quaternion (w, x, y, z) turned by ``angle`` [rad] about world z (its yaw grows by ``angle``,
+    its roll and pitch stay)."""
+    w, x, y, z = quaternion
+    c, s = math.cos(angle / 2.0), math.sin(angle / 2.0)
+    return (c * w - s * z, c * x - s * y, c * y + s * x, c * z + s * w)

@@ -37,7 +37,7 @@ import dataclasses
 import math
 
 import numpy as np
-from landing_msgs.geometry import yaw_from_quaternion
+from landing_msgs.geometry import turned_about_world_z, yaw_from_quaternion
 
 from .flow_surface import rotation_of
 
@@ -135,6 +135,20 @@ class HorizontalFilter:
         """(a, c): the flow's correction; a = 1, c = 0 for an exact flow and yaw."""
         return self.x[4], self.x[5]
 
+    @property
+    def turn(self):
+        """What the IMU's yaw is short of the true heading by, as the flow's correction (a, c) has it [rad]:
+        a = cos(drift) / scale, c = -sin(drift) / scale, and the heading is the reported yaw minus the drift."""
+        return math.atan2(self.x[5], self.x[4]) if self.initialised else 0.0
+
+    def reanchor(self, position_xy, variance):
+        """A new position (``variance`` per axis) that keeps the flow's bias, scale and turn: they describe the
+        sensors, not where the drone is, and the turn is what corrects the heading the drone is flown with."""
+        self.x[:2] = position_xy[:2]
+        self.P[:2, :] = 0.0
+        self.P[:, :2] = 0.0
+        self.P[0, 0] = self.P[1, 1] = variance
+
     @staticmethod
     def _rotation(yaw):
         c, s = math.cos(yaw), math.sin(yaw)
@@ -215,6 +229,7 @@ class InertialVelocity:
     (biased by a few cm/s^2, i.e. a few cm/s over the second of a descent) carries the velocity instead."""
 
     MAX_STEP = 0.2  # a gap longer than this between accelerations is not integrated across, nor trusted [s]
+    HISTORY = 0.5   # how far back a reading may be compared with the velocity of its instant [s]
 
     def __init__(self, gain, reference_std):
         self.gain, self.reference_std = gain, reference_std
@@ -222,6 +237,14 @@ class InertialVelocity:
         self.accelerated = None    # time of the last acceleration
         self.corrected = None      # time of the last reading
         self.trust = 1.0           # the last reading's share of the gain (0: accelerometer alone, 1: the reading)
+        self.history = collections.deque()  # (time, velocity) after each acceleration, the last HISTORY seconds
+
+    def velocity_at(self, t):
+        """The velocity at ``t``: the last one integrated up to then (the present one for a later ``t``)."""
+        for stamp, velocity in reversed(self.history):
+            if stamp <= t + 1e-9:
+                return velocity
+        return self.velocity
 
     def fresh(self, t):
         """True while accelerations arrive: without them the velocity is the reading's."""
@@ -234,6 +257,9 @@ class InertialVelocity:
             return
         if self.velocity is not None and dt is not None and dt <= self.MAX_STEP:
             self.velocity = self.velocity + np.asarray(acceleration_xy, dtype=float) * dt
+            self.history.append((t, self.velocity))
+            while self.history and self.history[0][0] < t - self.HISTORY:
+                self.history.popleft()
         self.accelerated = t
 
     def correct(self, t, reference_xy, reference_std):
@@ -244,11 +270,17 @@ class InertialVelocity:
         self.trust = floor / (floor + reference_std ** 2)
         if not self.fresh(t) or self.corrected is None:
             self.velocity = reference
+            self.history.clear()
         else:
+            # A reading is compared with the velocity of its own instant: navdata arrives a link's delay after the
+            # IMU has carried the velocity on (harsh: a sample later), and pulling today's velocity towards an older
+            # reading put 0.05 s of lag into it, and 0.1 s into the position, in which the pad is placed.
             dt = min(self.MAX_STEP, max(0.0, t - self.corrected))
-            self.velocity = self.velocity + (1.0 - math.exp(-self.gain * self.trust * dt)) * (reference - self.velocity)
-        self.corrected = t
-        return self.velocity
+            step = (1.0 - math.exp(-self.gain * self.trust * dt)) * (reference - self.velocity_at(t))
+            self.velocity = self.velocity + step
+            self.history = collections.deque((stamp, velocity + step) for stamp, velocity in self.history)
+        self.corrected = max(t, self.corrected) if self.corrected is not None else t
+        return self.velocity_at(t)
 
 
 @dataclasses.dataclass
@@ -315,11 +347,20 @@ class DroneEstimator:
         fresh, else the last GPS velocity while that is fresh, else none (the position then holds
         while its variance grows)."""
         if self._flow_fresh(t):
-            vx, vy = self.horizontal.world_velocity(self.flow_heading, self.yaw, self.unseen_velocity[1])
+            vx, vy = self.horizontal.world_velocity(self.flow_heading, self.yaw, self._unseen_now())
             return np.array([vx, vy, self.flow_heading[2]])
         if self.gps_velocity is not None and t - self.gps_velocity_time <= self.p.flow_timeout:
             return np.array(self.gps_velocity, dtype=float)
         return np.zeros(3)
+
+    def _unseen_now(self):
+        """What the motion model adds to the flow's velocity now: over the vehicle the part of its velocity the
+        flow did not see, and with the accelerometer also how the velocity changed since the latest reading (the
+        IMU comes at the navdata's rate and less late: a held reading lagged by half a sample and more)."""
+        if self.inertial is not None and self.flow_heading is not None and self.inertial.fresh(self.time) and \
+                self.unseen_velocity[0] is not None:
+            return self.inertial.velocity - self.horizontal.world_velocity(self.flow_heading, self.yaw)
+        return self.unseen_velocity[1]
 
     def _advance(self, t):
         if self.time is None:
@@ -329,7 +370,7 @@ class DroneEstimator:
         if dt <= 0.0:
             return  # a late message is used as if taken now: its age is below one sample period
         if self._flow_fresh(self.time):
-            self.horizontal.predict_flow(dt, self.flow_heading, self.yaw, self.unseen_velocity[1])
+            self.horizontal.predict_flow(dt, self.flow_heading, self.yaw, self._unseen_now())
         else:
             self.horizontal.predict_world(dt, self._velocity(self.time))
         self.vertical.predict(dt, self._velocity(self.time)[2])
@@ -384,7 +425,12 @@ class DroneEstimator:
                              self.vertical.position_at(dt, velocity[2])])
         position -= self._correction_left(max(0.0, dt))
         variance = np.array([self.horizontal.P[0, 0], self.horizontal.P[1, 1], self.vertical.var])
-        return Estimate(t, position, velocity, tuple(self.orientation), self.yaw, variance)
+        # The heading corrected by the yaw drift the flow's turn has learnt: the tracker turns its commands into
+        # the drone's heading frame with it (in harsh the IMU's yaw was 0.07 rad off after a minute: 0.7 m/s
+        # across the road at 10 m/s).
+        turn = self.horizontal.turn
+        return Estimate(t, position, velocity, turned_about_world_z(self.orientation, turn),
+                        math.atan2(math.sin(self.yaw + turn), math.cos(self.yaw + turn)), variance)
 
     # ----- sensors -------------------------------------------------------------------------------
     def imu(self, t, orientation_wxyz, specific_force=None):
@@ -405,9 +451,7 @@ class DroneEstimator:
         if self.inertial is not None and specific_force is not None and all(map(math.isfinite, specific_force)):
             acceleration = rotation_of(w, x, y, z) @ np.asarray(specific_force, dtype=float)
             # Turned like the flow by the yaw's drift the horizontal filter has learnt (its a, c).
-            a, c = self.horizontal.scale_and_turn
-            turn = math.atan2(c, a) if self.horizontal.initialised else 0.0
-            self.inertial.accelerate(t, heading_to_world(acceleration[0], acceleration[1], turn))
+            self.inertial.accelerate(t, heading_to_world(acceleration[0], acceleration[1], self.horizontal.turn))
         return True
 
     def flow(self, t, vx_heading, vy_heading, vz):
@@ -492,10 +536,11 @@ class DroneEstimator:
     def _orientation_at(self, t):
         """The IMU orientation at ``t``: the last one not after it. The IMU and navdata arrive on their own
         threads, and at a car's speed the view of the vehicle turns with the drone's pitch within 0.1 s."""
+        turn = self.horizontal.turn  # the yaw drift learnt, as in estimate()
         for stamp, orientation in reversed(self.orientations):
             if stamp <= t + 1e-9:
-                return orientation
-        return self.orientation
+                return turned_about_world_z(orientation, turn)
+        return turned_about_world_z(self.orientation, turn)
 
     def _position_over(self, pad_position, t):
         """The drone's position for the view of the vehicle: the estimate, its height above the pad taken from
@@ -532,7 +577,7 @@ class DroneEstimator:
                 return False
             self.log("%d GPS fixes in a row disagree with the estimate; re-anchoring to GPS" % self.gps_rejections)
             self.counters["gps_reanchored"] += 1
-            self.horizontal.reset(position, variance)
+            self.horizontal.reanchor(position, variance)
             self.pending_correction[:2] = 0.0  # a re-anchoring is a real jump: publish it as one
         else:
             before = self.horizontal.x[:2].copy()
