@@ -441,6 +441,21 @@ def test_below_the_blend_over_a_fast_vehicle_an_older_detection_still_counts_for
             assert outs[-1].command.vz > 0.0, (weight, speed)
 
 
+def test_over_a_fast_vehicle_the_gate_counts_what_the_prediction_may_have_drifted_since_the_pad_was_seen():
+    """Locked over a car at 15 m/s, 0.03 m off: with the pad seen 0.3 s ago the touchdown is committed; 0.65 s ago
+    (a harsh flight once touched down 0.22 m off so), the drift it may hold (blind_drift_per_speed x 15 m/s x 0.55 s)
+    puts the error over gate_error and the drone waits at the gate."""
+    height = P.gate_height
+    for vision_age, commits in ((0.3, True), (0.65, False)):
+        f = landing_flight(height=height)
+
+        def riding(t):
+            return {"drone": drone(x=15.0 * t + 0.03, height=height, vx=15.0), "pad": pad(t, x=15.0 * t, vx=15.0)}
+        f.run(P.gate_ready_time + 0.1, make=riding, flow_weight=0.95, vision_age=vision_age)
+        assert f.sm.committed == commits, vision_age
+    assert 0.03 + P.blind_drift_per_speed * 15.0 * (0.65 - P.gate_vision_age) > P.gate_error
+
+
 def test_ardrone_land_is_sent_at_land_height_during_the_final_descent():
     f = landing_flight(height=P.gate_height)
     f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))

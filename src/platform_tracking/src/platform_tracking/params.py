@@ -189,6 +189,7 @@ class TrackingParams:
     blend_min_pad_speed: float = spec(4.0, 0.0, 50.0, "m/s")
     blend_descent_rate: float = spec(0.8, 0.05, 3.0, "m/s")
     locked_vision_age: float = spec(1.0, 0.0, 10.0, "s")
+    blind_drift_per_speed: float = spec(0.01, 0.0, 1.0, "-")
 
     def check(self, source="tracking parameters"):
         """Relations between parameters that a single range cannot express."""
