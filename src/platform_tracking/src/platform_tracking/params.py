@@ -190,6 +190,8 @@ class TrackingParams:
     blend_descent_rate: float = spec(0.8, 0.05, 3.0, "m/s")
     locked_vision_age: float = spec(1.0, 0.0, 10.0, "s")
     blind_drift_per_speed: float = spec(0.01, 0.0, 1.0, "-")
+    aim_height: float = spec(0.6, 0.0, 10.0, "m")
+    aim_lean_time: float = spec(2.0, 0.01, 60.0, "s")
 
     def check(self, source="tracking parameters"):
         """Relations between parameters that a single range cannot express."""
