@@ -11,6 +11,14 @@
 namespace uav_vision {
 
 namespace {
+// Heading [rad] of a rotation: about world z.
+double yawOf(const Eigen::Quaterniond& q) {
+  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+}
+}  // namespace
+
+
+namespace {
 
 template <typename T>
 T required(const ros::NodeHandle& pnh, const std::string& key) {
@@ -233,11 +241,19 @@ void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg)
           : Eigen::Vector3d::Zero();
   const ros::Time stamp = msg->header.stamp;
   if (!estimates_.empty() && stamp < estimates_.back().stamp) estimates_.clear();  // time jumped back
-  estimates_.push_back({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity});
+  // The estimator publishes the IMU's attitude turned by the yaw drift it has learnt: what turns this frame's
+  // IMU-aligned vector into the world the estimate (and the tracker) lives in.
+  double heading_turn = 0.0;
+  const auto& q = msg->pose.pose.orientation;
+  const auto imu = attitudes_.at(stamp.toSec());
+  if (imu && std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) &&
+      q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z > 0.25)
+    heading_turn = std::remainder(yawOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z)) - yawOf(*imu), 2.0 * M_PI);
+  estimates_.push_back({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity, heading_turn});
   while ((stamp - estimates_.front().stamp).toSec() > 1.0) estimates_.pop_front();
 }
 
-std::optional<Eigen::Vector3d> PlatformDetectionRos::dronePositionAt(const ros::Time& stamp) const {
+std::optional<PlatformDetectionRos::PositionEstimate> PlatformDetectionRos::estimateAt(const ros::Time& stamp) const {
   if (estimates_.empty()) return std::nullopt;
   const auto later = std::lower_bound(estimates_.begin(), estimates_.end(), stamp,
                                       [](const PositionEstimate& e, const ros::Time& t) { return e.stamp < t; });
@@ -245,12 +261,13 @@ std::optional<Eigen::Vector3d> PlatformDetectionRos::dronePositionAt(const ros::
     const auto& a = *std::prev(later);
     const double span = (later->stamp - a.stamp).toSec();
     const double f = span > 0.0 ? (stamp - a.stamp).toSec() / span : 0.0;
-    return a.position + f * (later->position - a.position);
+    return PositionEstimate{stamp, a.position + f * (later->position - a.position), f < 0.5 ? a.velocity : later->velocity,
+                            f < 0.5 ? a.heading_turn : later->heading_turn};
   }
   const PositionEstimate& nearest = later == estimates_.end() ? estimates_.back() : *later;
   const double offset = (stamp - nearest.stamp).toSec();
   if (std::abs(offset) > config_.odom_timeout) return std::nullopt;
-  return nearest.position + offset * nearest.velocity;
+  return PositionEstimate{stamp, nearest.position + offset * nearest.velocity, nearest.velocity, nearest.heading_turn};
 }
 
 std::optional<landing_msgs::InputProblem> PlatformDetectionRos::inputProblem(const std_msgs::Header& header,
@@ -341,14 +358,16 @@ void PlatformDetectionRos::publish(const std_msgs::Header& image_header, const P
   platform_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.centre_in_body));
   if (observation.strip_found)
     indicator_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.strip_in_body));
-  const std::optional<Eigen::Vector3d> drone = dronePositionAt(image_header.stamp);
+  const std::optional<PositionEstimate> drone = estimateAt(image_header.stamp);
   if (!drone) {
     ROS_WARN_THROTTLE(config_.warn_period, "no %s within %.2f s of the frame: publishing the relative pad position only",
                       odom_sub_.getTopic().c_str(), config_.odom_timeout);
     return;
   }
-  // The estimate's own orientation is not needed: the IMU attitude already turned the vector to world axes.
-  platform_in_world_pub_.publish(pointMsg(image_header, config_.world_frame, *drone + observation.centre_world_aligned));
+  // The IMU attitude turned the vector to its own world axes, whose yaw drifts; the estimate's heading corrects it.
+  const Eigen::Vector3d offset = Eigen::AngleAxisd(drone->heading_turn, Eigen::Vector3d::UnitZ()) *
+                                 observation.centre_world_aligned;
+  platform_in_world_pub_.publish(pointMsg(image_header, config_.world_frame, drone->position + offset));
 }
 
 void PlatformDetectionRos::publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image,

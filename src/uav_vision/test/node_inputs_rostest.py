@@ -89,8 +89,10 @@ class NodeInputsTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("node_inputs_test")
         cls.points = []
+        cls.world_points = []
         cls.warnings = []
         rospy.Subscriber("/platform/current_platform_position_in_ardrone", PointStamped, cls.points.append)
+        rospy.Subscriber("/platform/current_platform_position_in_world", PointStamped, cls.world_points.append)
         rospy.Subscriber("/rosout", Log, lambda m: cls.warnings.append(m.msg) if m.level >= Log.WARN else None,
                          queue_size=100)
         cls.pub = {
@@ -248,6 +250,39 @@ class NodeInputsTest(unittest.TestCase):
         point = self.detect_once(stamp=taken, publish_sensors=False)
         self.assertAlmostEqual(point.point.y, -20.0 / FX * CAMERA_HEIGHT, delta=0.004)
         self.assertAlmostEqual(point.point.z, -(CAMERA_HEIGHT + 0.035), delta=0.02)
+
+    def test_91_the_world_fix_is_turned_by_the_heading_the_estimate_corrected(self):
+        """The IMU says yaw 0; the drone estimator, having learnt the IMU's yaw drift, publishes heading +90 deg
+        at the same stamp. The pad 20 px right of the image centre is to the drone's right: along world -y by the
+        IMU, along world +x by the corrected heading, which the world fix follows."""
+        offsets = {}
+        for turn in (0.0, np.pi / 2):
+            stamp = rospy.Time.now()
+            self.publish_sensors(stamp)
+            odom = Odometry()
+            odom.header.stamp, odom.header.frame_id = stamp, "world"
+            odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z = 1.0, 2.0, 3.0
+            odom.pose.pose.orientation.w, odom.pose.pose.orientation.z = np.cos(turn / 2), np.sin(turn / 2)
+
+            frame = image_msg(stamp, pad_image())
+            last_sent = [0.0]
+
+            def sent_and_received(odom=odom, frame=frame, stamp=stamp):
+                # Sent again every 0.2 s: the odometry and the frame travel on their own connections, and a frame
+                # that came first is published relative to the drone only.
+                if time.monotonic() - last_sent[0] > 0.2:
+                    self.pub["odom"].publish(odom)
+                    self.pub["image"].publish(frame)
+                    last_sent[0] = time.monotonic()
+                return any(p.header.stamp == stamp for p in self.world_points)
+            wait_for(sent_and_received, "the world fix of the frame")
+            point = next(p for p in self.world_points if p.header.stamp == stamp)
+            offsets[turn] = (point.point.x - 1.0, point.point.y - 2.0)
+        right = 20.0 / FX * CAMERA_HEIGHT
+        self.assertAlmostEqual(offsets[0.0][0], 0.0, delta=0.01)
+        self.assertAlmostEqual(offsets[0.0][1], -right, delta=0.01)
+        self.assertAlmostEqual(offsets[np.pi / 2][0], right, delta=0.01)
+        self.assertAlmostEqual(offsets[np.pi / 2][1], 0.0, delta=0.01)
 
     def test_9_missing_parameter_stops_the_node_naming_it(self):
         result = subprocess.run(["rosrun", "uav_vision", "platform_detection", "__name:=unconfigured_detection"],
