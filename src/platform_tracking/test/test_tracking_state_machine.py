@@ -389,9 +389,27 @@ def test_landing_climbs_for_a_wider_view_when_the_camera_has_lost_the_pad():
 
 
 def test_landing_back_to_tracking_when_the_error_exceeds_abort_error():
-    f = landing_flight()
+    """...and lands again as soon as the error has settled: the pad's track goes on, min_tracking_time does not
+    start again (in harsh each re-try waited 10 s more)."""
+    f = tracking_flight()
+    f.run(P.min_tracking_time + P.settle_time + 0.2, make=fresh(height=4.0))
+    assert f.state == State.LANDING
     f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=P.abort_error + 0.1))
     assert f.state == State.TRACKING and "abort_error" in f.lines[-1]
+    f.run(P.settle_time + 0.2, make=fresh(height=4.0))
+    assert f.state == State.LANDING
+
+
+def test_decisions_go_by_the_drone_not_by_the_view_it_searches_with():
+    """The pad unseen for longer than search_view_after: the tracker flies the camera's view centre over it, but
+    the errors that decide (here: calling the landing off) are the drone's. Leaning 20 deg in a corner at 4 m the
+    view is 1.5 m away, and such an error called a landing off."""
+    f = landing_flight(height=4.0)
+    state = drone(height=4.0)
+    state.view_shift = np.array([-0.37, 0.0])
+    out = f.step(drone=state, pad=pad(f.t + 1 / 30, x=0.2), vision_age=P.search_view_after + 0.1)
+    assert f.state == State.LANDING and out.error == pytest.approx(0.2, abs=0.01)
+    assert out.command.vx > 1.0  # flying the view (1.68 m short of the pad), not the drone (0.2 m)
 
 
 def test_landing_back_to_tracking_when_the_supervisor_withdraws_permission():

@@ -156,7 +156,7 @@ class TrackingParams:
     autostart: bool = spec(False)
     min_tracking_time: float = spec(10.0, 0.0, 600.0, "s")
     settle_error: float = spec(0.3, 0.01, 10.0, "m")
-    settle_time: float = spec(2.0, 0.0, 60.0, "s")
+    settle_time: float = spec(1.0, 0.0, 60.0, "s")
     # landing
     landing_descent_rate: float = spec(0.5, 0.05, 3.0, "m/s")
     descend_max_error: float = spec(0.25, 0.01, 10.0, "m")

@@ -109,6 +109,7 @@ class TrackingStateMachine:
         self._camera_latency = 0.0  # of the current step: how late detections arrive after their image [s]
         self.state = State.LANDED
         self.entered = 0.0                       # time the current state was entered
+        self.tracked_since = 0.0                 # time the pad's track began (TRACKING entered, not from LANDING)
         self.takeoff_pending = False
         self.land_pending = False
         self.last_pad: Optional[PadPrediction] = None
@@ -145,6 +146,8 @@ class TrackingStateMachine:
     def _transition(self, new_state, reason, t):
         """The one place where the state changes."""
         line = "%s -> %s (%s)" % (self.state.value, new_state.value, reason)
+        if new_state == State.TRACKING and self.state != State.LANDING:
+            self.tracked_since = t  # a landing called off goes on with the track it had
         self.state = new_state
         self.entered = t
         self.settled_since = None
@@ -206,7 +209,7 @@ class TrackingStateMachine:
         vx, vy = TrackingController.to_heading_frame(world_xy, yaw)
         return VelocityCommand(vx, vy, vz, 0.0)
 
-    def _flown(self, t, drone, pad):
+    def _flown(self, t, drone, pad, searching=True):
         """The point of the drone the tracker flies over the pad. The pad not seen: the camera's view centre (the
         prediction, GPS alone and metres off after a while, may have the drone right above the pad while the tilted
         camera looks elsewhere). Over a fast vehicle: the view centre as it would be at no more than aim_height, so
@@ -214,7 +217,7 @@ class TrackingStateMachine:
         stream, looks 0.11 m behind itself at the gate; the lead shrinks to nothing at the touchdown."""
         if pad is None:
             return drone
-        if self._searching() and not self.committed:
+        if searching and self._searching() and not self.committed:
             return drone.viewing(self._height(drone, pad, t))
         if self.state in (State.TRACKING, State.LANDING) and self.steady_view_shift is not None and \
                 float(np.hypot(*pad.velocity[:2])) >= self.p.blend_min_pad_speed:
@@ -237,8 +240,10 @@ class TrackingStateMachine:
         self.lean_time = t
 
     def _errors(self, t, drone, pad):
-        """(error, relative velocity) of the point flown over the pad (see _flown)."""
-        return self.controller.errors(t, self._flown(t, drone, pad), pad)
+        """(error, relative velocity) that the state decisions go by: of the point flown over a fast vehicle (see
+        _flown), but not of the view searched with, which swings with every lean (in a corner at 3 m/s, 3.3 m at
+        4 m, which called a landing off)."""
+        return self.controller.errors(t, self._flown(t, drone, pad, searching=False), pad)
 
     def _tracking_xy(self, t, drone, pad, accumulate=True):
         return self.controller.world_velocity(t, self._flown(t, drone, pad), pad, accumulate=accumulate,
@@ -378,11 +383,11 @@ class TrackingStateMachine:
         else:
             self.settled_since = None
         settled = self.settled_since is not None and t - self.settled_since >= p.settle_time
-        auto = p.auto_land and t - self.entered >= p.min_tracking_time and settled
+        auto = p.auto_land and t - self.tracked_since >= p.min_tracking_time and settled
         if self.land_pending or auto:
             if inp.landing_allowed:
                 why = "land requested" if self.land_pending else \
-                    "tracked %.0f s, error below %.2f m for %.1f s" % (t - self.entered, p.settle_error, p.settle_time)
+                    "tracked %.0f s, error below %.2f m for %.1f s" % (t - self.tracked_since, p.settle_error, p.settle_time)
                 self._transition(State.LANDING, why, t)
                 return self._landing(inp)
             if not self.refusal_logged:
