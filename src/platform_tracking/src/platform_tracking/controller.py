@@ -105,6 +105,23 @@ class PadPrediction:
         if any(b < a for a, b in zip(self.path_times, self.path_times[1:])):
             raise ValueError("path times must not decrease")
 
+    def moved_to(self, t, position_xy, velocity_xy):
+        """The prediction moved so that at ``t`` the pad is at ``position_xy`` moving at ``velocity_xy`` (world)
+        [m, m/s]; before and after it changes as predicted (a relative track of the pad, relative.py, placing it
+        where the world-frame prediction has drifted from)."""
+        shift = np.asarray(position_xy, dtype=float) - self.position_at(t)[:2]
+        now_velocity = self.path_velocity_at(t)
+        drift = np.asarray(velocity_xy, dtype=float) - (self.velocity if now_velocity is None else now_velocity)[:2]
+
+        def moved(time, position):
+            out = np.array(position, dtype=float)
+            out[:2] += shift + drift * (time - t)
+            return out
+        velocity = self.velocity.copy()
+        velocity[:2] += drift
+        return PadPrediction(self.stamp, moved(self.stamp, self.position), velocity, self.path_times,
+                             [moved(time, position) for time, position in zip(self.path_times, self.path_positions)])
+
     @property
     def horizon(self):
         """Last time the prediction covers."""

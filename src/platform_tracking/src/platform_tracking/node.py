@@ -10,7 +10,8 @@ drone_estimator  ardrone/imu, ardrone/navdata, ardrone/gps/odom, ardrone/altimet
 
 platform_tracking ardrone/odom_estimate, kalman_prediction_path, kalman_platform_odom, ardrone/navdata,
                  ardrone/sonar_height, ardrone/flow_unseen_velocity, platform/current_platform_position_in_ardrone
-                 (only when it arrives: the pad was seen), landing_allowed (std_msgs/Bool, default true) and the
+                 (only when it arrives: the pad was seen) and ..._in_world (the pad relative to the drone, carried on
+                 by the flow: relative.py), landing_allowed (std_msgs/Bool, default true) and the
                  operator requests -> ardrone/cmd_vel at rate_hz (sim time), ardrone/takeoff and
                  ardrone/land as one-shot actions, platform_tracking/state (std_msgs/String, latched,
                  on every change), platform_tracking/target (geometry_msgs/PointStamped, world: where the
@@ -30,6 +31,7 @@ Inputs that are garbage (non-finite or implausible values, stamps from another t
 unknown words) are dropped with a warning naming the topic and what was wrong, once per topic and kind of
 problem every WARN_PERIOD (landing_msgs.input_check).
 """
+import bisect
 import collections
 import dataclasses
 import math
@@ -52,11 +54,13 @@ from .camera_latency import CameraLatency
 from .controller import DroneState, PadPrediction
 from .estimator import DroneEstimator
 from .flow_surface import FlowSurface, WeightForecast
+from .relative import RelativeTrack
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
 from .state_machine import Inputs, State, TrackingStateMachine
 
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
+ESTIMATE_HISTORY = 2.0     # how far back the estimate is kept, to place a fix at its image's capture time [s]
 DELAY_SAMPLES = 15         # detections whose arrival-minus-capture median is the camera latency [-]
 LATENCY_PERIOD = 1.0       # how often that latency is published on platform_tracking/camera_latency [s of sim time]
 WORLD_FRAMES = ("world", "/world", "")
@@ -323,6 +327,8 @@ class TrackingNode:
         self.landing_allowed = True
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.camera_latency = CameraLatency(DELAY_SAMPLES, LATENCY_PERIOD)  # of the detections' arrival
+        self.estimates = collections.deque()  # (stamp, position, velocity) of the last seconds of odom_estimate
+        self.relative = RelativeTrack(self.params.relative_fix_gain, self.params.relative_max_age)
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -341,6 +347,8 @@ class TrackingNode:
         rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
         rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, self.on_detection, queue_size=5, tcp_nodelay=True)
+        rospy.Subscriber("platform/current_platform_position_in_world", PointStamped, self.on_world_fix, queue_size=5,
+                         tcp_nodelay=True)
         rospy.Subscriber("platform_tracking/command", String, self.on_command, queue_size=10)
         rospy.Subscriber("ardrone/takeoff", Empty, lambda m: self.on_thesis_request(m, "takeoff"), queue_size=5)
         rospy.Subscriber("ardrone/land", Empty, lambda m: self.on_thesis_request(m, "land"), queue_size=5)
@@ -354,8 +362,27 @@ class TrackingNode:
         if problem:
             return self.rejections.reject("ardrone/odom_estimate", problem)
         state = DroneState.from_attitude((p.x, p.y, p.z), (v.x, v.y, v.z), (q.w, q.x, q.y, q.z))
+        stamp = stamp_of(msg)
         with self.lock:
-            self.estimate = (stamp_of(msg), state)
+            self.estimate = (stamp, state)
+            if self.estimates and stamp < self.estimates[-1][0]:
+                self.estimates.clear()
+            self.estimates.append((stamp, state.position[:2].copy(), state.velocity[:2].copy()))
+            while len(self.estimates) > 2 and self.estimates[0][0] < stamp - ESTIMATE_HISTORY:
+                self.estimates.popleft()
+
+    def _estimate_at(self, t):
+        """(position, velocity) of the drone's estimate at ``t`` (lock held): interpolated, or None out of reach."""
+        times = [e[0] for e in self.estimates]
+        i = bisect.bisect_left(times, t)
+        if i == 0 or i == len(times):
+            near = self.estimates[0] if i == 0 and times else (self.estimates[-1] if times else None)
+            if near is None or abs(near[0] - t) > 0.1:
+                return None
+            return near[1] + near[2] * (t - near[0]), near[2]
+        (t0, p0, v0), (t1, p1, v1) = self.estimates[i - 1], self.estimates[i]
+        f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
+        return p0 + f * (p1 - p0), v0 + f * (v1 - v0)
 
     def on_unseen(self, msg):
         problem = numbers_problem(MAX_SPEED_MPS, vector=(msg.vector.x, msg.vector.y)) or \
@@ -366,6 +393,25 @@ class TrackingNode:
             self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]),
                            float(msg.vector.z) if math.isfinite(msg.vector.z) else 0.0)
             self.flow_weight.add(self.unseen[0], self.unseen[2])
+            # What the flow itself measured: the estimate's velocity less the part of the vehicle's it did not see.
+            drone = self._estimate_at(self.unseen[0])
+            if drone is not None:
+                pad = self._pad_prediction()
+                pad_velocity = np.zeros(2) if pad is None else pad.velocity[:2]
+                self.relative.add_motion(self.unseen[0], drone[1] - self.unseen[1], self.unseen[2], pad_velocity)
+
+    def on_world_fix(self, msg):
+        """The camera's fix of the pad in the world, placed with the drone's estimate at the image's capture time:
+        less that estimate, the pad relative to the drone then (relative.py)."""
+        p = msg.point
+        problem = numbers_problem(MAX_POSITION_M, point=(p.x, p.y, p.z)) or header_problem(msg, WORLD_FRAMES[:1])
+        if problem:
+            return self.rejections.reject("platform/current_platform_position_in_world", problem)
+        t = stamp_of(msg)
+        with self.lock:
+            drone = self._estimate_at(t)
+            if drone is not None:
+                self.relative.add_fix(t, np.array([p.x, p.y]) - drone[0])
 
     def on_path(self, msg):
         problem = header_problem(msg, WORLD_FRAMES[:1])
@@ -483,7 +529,7 @@ class TrackingNode:
                             takeoff="takeoff" in requests, land="land" in requests,
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
                             vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight,
-                            camera_latency=self.camera_latency.value)
+                            camera_latency=self.camera_latency.value, relative=self.relative.at(t))
         before = self.machine.state
         out = self.machine.step(inputs)
         if out.send_takeoff:
@@ -520,6 +566,8 @@ class TrackingNode:
                 with self.lock:
                     self.machine = TrackingStateMachine(self.params, self.machine.logger)
                     self.estimate = self.path = self.pad_odom = self.prediction = None
+                    self.estimates.clear()
+                    self.relative.reset()
                 self.pub_state.publish(String(data=State.LANDED.value))
             except rospy.ROSInterruptException:
                 break

@@ -192,6 +192,8 @@ class TrackingParams:
     blind_drift_per_speed: float = spec(0.01, 0.0, 1.0, "-")
     aim_height: float = spec(0.6, 0.0, 10.0, "m")
     aim_lean_time: float = spec(2.0, 0.01, 60.0, "s")
+    relative_fix_gain: float = spec(0.5, 0.0, 1.0, "-")
+    relative_max_age: float = spec(1.0, 0.0, 10.0, "s")
 
     def check(self, source="tracking parameters"):
         """Relations between parameters that a single range cannot express."""

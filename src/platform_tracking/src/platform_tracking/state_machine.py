@@ -83,6 +83,8 @@ class Inputs:
     flow_weight: float = 0.0                # how much the drone's own velocity follows the vehicle under it (0 the
                                             # ground .. 1 the vehicle; ardrone/flow_unseen_velocity, flow_surface.py)
     camera_latency: float = 0.0             # how late the pad's detections arrive after their image [s]
+    relative: Optional[tuple] = None        # (position, rate) of the pad relative to the drone (world x, y) carried by the
+                                            # flow since the latest fix (relative.py) [m, m/s]; None: no such track
 
 
 @dataclasses.dataclass
@@ -264,7 +266,7 @@ class TrackingStateMachine:
         self._vision_age = inputs.vision_age
         self._follow_lean(t, inputs.drone)
         if inputs.pad is not None:
-            self.last_pad = inputs.pad
+            self.last_pad = self._relative_pad(inputs)
         if inputs.takeoff:
             self.takeoff_pending = True
         if inputs.land:
@@ -517,6 +519,15 @@ class TrackingStateMachine:
         locked = inp.flow_weight >= self.p.blend_weight_high and pad is not None and \
             float(np.hypot(*pad.velocity[:2])) >= self.p.blend_min_pad_speed
         return inp.vision_age <= (max(max_age, self.p.locked_vision_age) if locked else max_age)
+
+    def _relative_pad(self, inp):
+        """The prediction, placed by the relative track where the drone's flow sees the pad's texture alone (weight
+        above blend_weight_high): there its navdata velocity is relative to the pad, whatever the vehicle does."""
+        pad, drone = inp.pad, inp.drone
+        if inp.relative is None or drone is None or inp.flow_weight < self.p.blend_weight_high:
+            return pad
+        position, rate = inp.relative
+        return pad.moved_to(inp.time, drone.position[:2] + position, drone.velocity[:2] + rate)
 
     def _blind_drift(self, inp, pad):
         """How far the prediction may have drifted from the pad since it was last seen (beyond gate_vision_age):

@@ -1,0 +1,84 @@
+"""Where the pad is relative to the drone, carried on between the camera's fixes by the drone's own optical
+flow, ROS-free.
+
+Low over the pad the AR.Drone's flow sees the pad's texture and nothing else (its weight w, flow_surface.py, is
+1): its navdata velocity then *is* the drone's velocity relative to the pad, measured a navdata's delay late,
+whatever the vehicle does. The world-frame route (the pad filter's prediction minus the drone's estimate) has to
+learn every braking and pull-away from the camera's fixes, 0.4-0.7 s late, and in the last half metre, where the
+camera no longer sees the pad's centre, it drifted 0.15 m from the pad within a second (stop-and-go at 3 m/s: the
+touchdowns that ended 0.25 m from the centre). So, with ``seen`` the flow's velocity (world frame) and ``v_pad``
+the predicted pad velocity:
+
+    d/dt (pad - drone) = v_pad - v_drone = (1 - w) v_pad - seen     (seen = v_drone - w v_pad)
+
+integrated from the latest fix of the pad relative to the drone (each fix pulls the track towards it by
+``fix_gain``, at the fix's capture time, and the motion since is integrated again), for at most ``max_age`` after
+it. At w = 1 no estimate of the pad's velocity enters at all.
+"""
+import bisect
+import collections
+
+import numpy as np
+
+
+class RelativeTrack:
+    """The pad's horizontal position relative to the drone (pad - drone, world axes) [m] and its rate [m/s]."""
+
+    HISTORY = 2.0  # how long the flow's samples are kept: a fix arrives up to a camera latency late [s]
+
+    def __init__(self, fix_gain, max_age):
+        self.fix_gain, self.max_age = fix_gain, max_age
+        self.motion = collections.deque()  # (time, rate of pad - drone) from each flow sample, oldest first
+        self.anchor = None                 # (time, relative position) of the latest fix, filtered
+
+    def reset(self):
+        self.motion.clear()
+        self.anchor = None
+
+    def add_motion(self, t, seen_xy, weight, pad_velocity_xy):
+        """A flow sample at ``t``: its velocity (world x, y) [m/s], the flow's weight [-] and the pad's predicted
+        velocity [m/s]. Samples going back in time start the track afresh (the clock jumped back)."""
+        if self.motion and t < self.motion[-1][0]:
+            self.reset()
+        rate = (1.0 - weight) * np.asarray(pad_velocity_xy, dtype=float) - np.asarray(seen_xy, dtype=float)
+        self.motion.append((t, rate))
+        while len(self.motion) > 2 and self.motion[0][0] < t - self.HISTORY:
+            self.motion.popleft()
+
+    def add_fix(self, t, relative_xy):
+        """The camera's fix at its capture time ``t``: pad minus drone (world x, y) [m]."""
+        relative = np.asarray(relative_xy, dtype=float)
+        if self.anchor is None or t < self.anchor[0] or t - self.anchor[0] > self.max_age:
+            self.anchor = (t, relative)
+            return
+        carried = self._carried(t)
+        self.anchor = (t, carried + self.fix_gain * (relative - carried))
+
+    def at(self, t):
+        """(relative position, its rate) at ``t``, or None without a fix within max_age or a flow sample."""
+        if self.anchor is None or not self.motion or t - self.anchor[0] > self.max_age or t < self.anchor[0]:
+            return None
+        return self._carried(t), self._rate_at(t)
+
+    def _rate_at(self, t):
+        times = [m[0] for m in self.motion]
+        i = bisect.bisect_right(times, t)
+        return self.motion[max(0, i - 1)][1]
+
+    def _carried(self, t):
+        """The anchor carried on to ``t`` by the flow's rates: between two samples their mean, after the last its
+        own, before the first its own."""
+        t0, position = self.anchor
+        position = position.copy()
+        samples = list(self.motion)
+        first_t, first_rate = samples[0]
+        if t0 < first_t:
+            position += first_rate * (min(first_t, t) - t0)
+        for (ta, ra), (tb, rb) in zip(samples, samples[1:]):
+            start, end = max(ta, t0), min(tb, t)
+            if end > start:
+                position += 0.5 * (ra + rb) * (end - start)
+        last_t, last_rate = samples[-1]
+        if t > max(last_t, t0):
+            position += last_rate * (t - max(last_t, t0))
+        return position
