@@ -300,3 +300,17 @@ def test_a_state_from_an_attitude_has_its_yaw_and_sees_ahead_of_itself_when_pitc
     assert leaning.viewing(4.0).position[0] == pytest.approx(-4.0 * math.tan(pitch))
     upside_down = DroneState.from_attitude((0.0, 0.0, 4.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0))
     assert upside_down.view_shift is None
+
+
+def test_a_prediction_moved_to_a_place_and_velocity_keeps_its_changes():
+    """Moved so that at t it is 0.2 m further and 0.5 m/s faster along x: at t exactly there, 0.4 s later by the
+    path's own change plus the moved velocity."""
+    times = [0.0, 0.5, 1.0]
+    path = [np.array([0.0, 0.0, 0.5]), np.array([1.0, 0.0, 0.5]), np.array([2.5, 0.0, 0.5])]
+    pad = PadPrediction(0.0, path[0], np.array([2.0, 0.0, 0.0]), times, path)
+    t = 0.25
+    before = pad.position_at(t)
+    moved = pad.moved_to(t, before[:2] + (0.2, 0.0), pad.path_velocity_at(t)[:2] + (0.5, 0.0))
+    assert moved.position_at(t) == pytest.approx(before + (0.2, 0.0, 0.0))
+    assert moved.position_at(t + 0.4) == pytest.approx(pad.position_at(t + 0.4) + (0.2 + 0.5 * 0.4, 0.0, 0.0))
+    assert moved.position_at(t)[2] == pytest.approx(0.5)

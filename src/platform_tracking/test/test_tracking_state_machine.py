@@ -488,13 +488,14 @@ def test_over_a_fast_vehicle_the_tracker_flies_the_cameras_view_over_the_pad_bel
     for height, speed, lead in ((P.gate_height, 15.0, 0.32 * P.gate_height), (2.0, 15.0, 0.32 * P.aim_height),
                                 (P.gate_height, 2.0, 0.0)):
         f = landing_flight(height=height)
-        out = f.step(drone=leaning(speed * (f.t + 1 / 30), height, speed), pad=pad(f.t + 1 / 30, x=speed * (f.t + 1 / 30), vx=speed),
-                     flow_weight=0.95)
+        t = f.t + 1 / 30
+        out = f.step(drone=leaning(speed * t, height, speed), pad=pad(t, x=speed * t, vx=speed), flow_weight=0.95)
         assert out.error == pytest.approx(lead if speed > P.blend_min_pad_speed else 0.0, abs=0.01), (height, speed)
     f = landing_flight(height=P.gate_height)
 
     def ahead(t):
-        return {"drone": leaning(15.0 * t + 0.32 * P.gate_height, P.gate_height, 15.0), "pad": pad(t, x=15.0 * t, vx=15.0)}
+        return {"drone": leaning(15.0 * t + 0.32 * P.gate_height, P.gate_height, 15.0),
+                "pad": pad(t, x=15.0 * t, vx=15.0)}
     f.run(P.gate_ready_time + 0.1, make=ahead, flow_weight=0.95)
     assert f.sm.committed
     # The lead follows the steady lean, not each acceleration's: leaning twice as far for 0.1 s moves it by 5 %.
@@ -505,6 +506,19 @@ def test_over_a_fast_vehicle_the_tracker_flies_the_cameras_view_over_the_pad_bel
     state.view_shift = 2.0 * shift
     outs = f.run(0.1, make=lambda t: {"drone": state, "pad": pad(t, vx=15.0)}, flow_weight=0.95)
     assert outs[-1].error == pytest.approx(0.32 * P.aim_height, rel=0.06)
+
+
+def test_where_the_flow_sees_the_pad_alone_the_relative_track_places_the_pad():
+    """The world-frame prediction has the pad right below the drone, the relative track (carried by the flow since
+    the latest fix) 0.3 m ahead of it: with the flow's weight at 0.95 the tracker believes the track and flies
+    towards it; at 0.5 (the flow also sees the ground) it keeps to the prediction."""
+    for weight, expected in ((0.95, 0.3), (0.5, 0.0)):
+        f = landing_flight(height=1.0)
+        out = f.step(drone=drone(height=1.0, vx=1.0), pad=pad(f.t + 1 / 30, vx=1.0), flow_weight=weight,
+                     relative=(np.array([0.3, 0.0]), np.array([0.0, 0.0])))
+        assert out.error == pytest.approx(expected, abs=1e-6), weight
+        if expected:
+            assert out.command.vx > 0.3
 
 
 def test_ardrone_land_is_sent_at_land_height_during_the_final_descent():

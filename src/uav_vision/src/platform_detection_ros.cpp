@@ -261,8 +261,8 @@ std::optional<PlatformDetectionRos::PositionEstimate> PlatformDetectionRos::esti
     const auto& a = *std::prev(later);
     const double span = (later->stamp - a.stamp).toSec();
     const double f = span > 0.0 ? (stamp - a.stamp).toSec() / span : 0.0;
-    return PositionEstimate{stamp, a.position + f * (later->position - a.position), f < 0.5 ? a.velocity : later->velocity,
-                            f < 0.5 ? a.heading_turn : later->heading_turn};
+    const PositionEstimate& nearer = f < 0.5 ? a : *later;
+    return PositionEstimate{stamp, a.position + f * (later->position - a.position), nearer.velocity, nearer.heading_turn};
   }
   const PositionEstimate& nearest = later == estimates_.end() ? estimates_.back() : *later;
   const double offset = (stamp - nearest.stamp).toSec();

@@ -83,8 +83,8 @@ class Inputs:
     flow_weight: float = 0.0                # how much the drone's own velocity follows the vehicle under it (0 the
                                             # ground .. 1 the vehicle; ardrone/flow_unseen_velocity, flow_surface.py)
     camera_latency: float = 0.0             # how late the pad's detections arrive after their image [s]
-    relative: Optional[tuple] = None        # (position, rate) of the pad relative to the drone (world x, y) carried by the
-                                            # flow since the latest fix (relative.py) [m, m/s]; None: no such track
+    relative: Optional[tuple] = None        # (position, rate) of the pad relative to the drone (world x, y) carried
+                                            # by the flow since the latest fix (relative.py) [m, m/s]; None: none
 
 
 @dataclasses.dataclass
@@ -388,8 +388,8 @@ class TrackingStateMachine:
         auto = p.auto_land and t - self.tracked_since >= p.min_tracking_time and settled
         if self.land_pending or auto:
             if inp.landing_allowed:
-                why = "land requested" if self.land_pending else \
-                    "tracked %.0f s, error below %.2f m for %.1f s" % (t - self.tracked_since, p.settle_error, p.settle_time)
+                why = "land requested" if self.land_pending else "tracked %.0f s, error below %.2f m for %.1f s" % (
+                    t - self.tracked_since, p.settle_error, p.settle_time)
                 self._transition(State.LANDING, why, t)
                 return self._landing(inp)
             if not self.refusal_logged:
