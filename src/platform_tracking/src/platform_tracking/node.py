@@ -56,7 +56,7 @@ from .estimator import DroneEstimator
 from .flow_surface import FlowSurface, WeightForecast
 from .relative import RelativeTrack
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
-from .state_machine import Inputs, State, TrackingStateMachine
+from .state_machine import AIRBORNE_NAV, Inputs, State, TrackingStateMachine
 
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
@@ -216,7 +216,7 @@ class EstimatorNode:
         t = stamp_of(msg)
         with self.lock:
             self._at(t)
-            self.estimator.flow(t, msg.vx, msg.vy, msg.vz)
+            self.estimator.flow(t, msg.vx, msg.vy, msg.vz, airborne=msg.state in AIRBORNE_NAV)
             unseen, weight = self.estimator.unseen_velocity[1], self.estimator.flow_weight
         if self.surface.enabled:
             correction = Vector3Stamped()
