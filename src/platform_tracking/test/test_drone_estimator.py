@@ -386,6 +386,40 @@ def test_over_the_vehicle_the_flow_sees_the_drone_relative_to_it_and_the_estimat
 
 
 
+def test_the_flow_is_calibrated_against_gps_velocity_in_flight_only():
+    """Resting on its pad the drone's flow reads a few cm/s whatever the vehicle does: a realistic soak's drone,
+    riding a circling vehicle between missions, had learnt a 25 deg turn of its flow in 200 s from the GPS fixes.
+    The same fix (off the estimate, a velocity at odds with the flow) calibrates a flying drone's flow and leaves
+    a resting one's as it was, while it still places both."""
+    learnt = {}
+    for airborne in (True, False):
+        est = DroneEstimator(EstimatorParams())
+        est.imu(0.0, yaw_quaternion(0.3))
+        est.gps(0.0, (1.0, 2.0, 4.0))
+        est.altimeter(0.0, 4.0)
+        t = 0.0
+        for _ in range(200):  # 4 s forward at 1.5 m/s by the flow, the GPS agreeing
+            t += 0.02
+            est.imu(t, yaw_quaternion(0.3))
+            est.flow(t, 1.5, 0.0, 0.0, airborne=airborne)
+            if round(t / 0.02) % 10 == 0:
+                est.gps(t, est.estimate(t).position, heading_and_world(1.5, 0.0, 0.3))
+        calibration = est.horizontal.x[2:6].copy()
+        est.flow(t + 0.02, 1.5, 0.0, 0.0, airborne=airborne)
+        placed = est.horizontal.x[:2].copy()
+        fix = est.estimate(t + 0.02).position + (0.5, -0.5, 0.0)  # 0.7 m off, the velocity 18 deg off
+        est.gps(t + 0.02, fix, heading_and_world(1.5, 0.5, 0.3))
+        learnt[airborne] = est.horizontal.x[2:6] - calibration
+        assert (est.horizontal.x[:2] - placed) @ (0.5, -0.5) > 0.001  # pulled towards the fix
+        assert est.counters["gps_velocity_landed"] == (0 if airborne else 21)
+    assert np.abs(learnt[True]).max() > 0.005  # one fix: 0.009 m/s of bias, 0.006 of the turn term
+    assert np.abs(learnt[False]).max() < 1e-9
+
+
+def heading_and_world(forward, left, yaw):
+    """A heading-frame velocity as the world-frame GPS velocity (x, y, 0)."""
+    return (*heading_to_world(forward, left, yaw), 0.0)
+
 def test_inertial_velocity_follows_a_trusted_reference_and_coasts_through_an_untrusted_one():
     """The complementary filter: a reading with the usual uncertainty pulls the velocity to it within a fraction
     of a second; a reading whose uncertainty is metres per second (a fast vehicle, the flow's weight unsure)

@@ -212,12 +212,20 @@ class HorizontalFilter:
         S = self.P[:2, :2] + variance * np.eye(2)
         return float(innovation @ np.linalg.solve(S, innovation))
 
-    def update(self, position_xy, variance):
+    def update(self, position_xy, variance, calibrate=True):
+        """A position fix. With ``calibrate`` False it places the drone but teaches the flow's bias, scale and turn
+        nothing: their gain is zeroed and the covariance kept consistent with that (a "consider" update)."""
         innovation = np.asarray(position_xy[:2]) - self.x[:2]
         S = self.P[:2, :2] + variance * np.eye(2)
         gain = self.P[:, :2] @ np.linalg.inv(S)
+        if calibrate:
+            self.P = self.P - gain @ self.P[:2, :]
+        else:
+            gain[2:, :] = 0.0
+            observed = np.eye(6)[:2]
+            kept = np.eye(6) - gain @ observed
+            self.P = kept @ self.P @ kept.T + variance * gain @ gain.T  # Joseph form: right for any gain
         self.x += gain @ innovation
-        self.P = self.P - gain @ self.P[:2, :]
         self.P = 0.5 * (self.P + self.P.T)
 
 
@@ -584,13 +592,14 @@ class DroneEstimator:
             self.pending_correction[:2] = 0.0  # a re-anchoring is a real jump: publish it as one
         else:
             before = self.horizontal.x[:2].copy()
-            self.horizontal.update(position, variance)
+            self.horizontal.update(position, variance, calibrate=self.airborne)
             self.pending_correction[:2] += self.horizontal.x[:2] - before
         self.gps_rejections = 0
         self.counters["gps_used"] += 1
-        # Resting on the pad the flow reads a few cm/s whatever the vehicle does, and the vehicle's turning
-        # against the GPS's latency pulled the learnt turn 20 deg in 200 s of a ride (a realistic soak):
-        # the flow's bias, scale and turn are learnt in flight only.
+        # Resting on the pad the flow reads a few cm/s whatever the vehicle does: the flow's bias, scale and turn
+        # are learnt in flight only (position fixes too leave them alone above; riding a circling vehicle for
+        # 200 s between missions, the fixes had turned the learnt turn by 25 deg through its correlation with
+        # the position).
         if velocity is not None and self.p.use_gps_velocity and not self.airborne:
             self.counters["gps_velocity_landed"] += 1
         elif velocity is not None and self.p.use_gps_velocity and self._flow_fresh(t):
