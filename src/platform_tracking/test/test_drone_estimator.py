@@ -530,3 +530,19 @@ def test_through_the_flows_blend_over_a_fast_vehicle_the_accelerometer_keeps_the
     measured, modelled = run(EstimatorParams()), run(EstimatorParams(inertial_gain=0.0))
     assert modelled[:, 0].max() > 8.0
     assert measured[:, 0].max() < min(3.0, modelled[:, 0].max() / 3.0) and measured[:, 1].max() < 0.2
+
+
+def test_state_history_interpolates_inside_extrapolates_a_little_outside_and_restarts_when_time_goes_back():
+    from platform_tracking.estimator import StateHistory
+    history = StateHistory(span=1.0, keep=2)
+    assert history.at(0.0) is None
+    for t in (0.0, 0.1, 0.2):
+        history.add(t, np.array([t, 0.0]), np.array([1.0, 0.0]))
+    position, velocity = history.at(0.15)
+    assert position == pytest.approx((0.15, 0.0)) and velocity == pytest.approx((1.0, 0.0))
+    assert history.at(0.25) is None                                                  # outside, no extrapolation
+    assert history.at(0.25, max_extrapolation=0.1)[0] == pytest.approx((0.25, 0.0))  # the last carried on
+    history.add(5.0, np.array([5.0, 0.0]), np.array([1.0, 0.0]))                     # older than span, but keep=2
+    assert [sample[0] for sample in history.samples] == [0.2, 5.0]
+    history.add(1.0, np.array([9.0, 0.0]), np.array([0.0, 0.0]))                     # the clock went back
+    assert [sample[0] for sample in history.samples] == [1.0]

@@ -229,6 +229,42 @@ class HorizontalFilter:
         self.P = 0.5 * (self.P + self.P.T)
 
 
+class StateHistory:
+    """(time, position, velocity) samples of the last ``span`` seconds, oldest first, for placing a late
+    measurement at its own instant. At least ``keep`` samples stay however old; a sample earlier than the latest
+    (the clock went back) starts the history afresh."""
+
+    def __init__(self, span, keep=0):
+        self.span, self.keep = span, keep
+        self.samples = collections.deque()
+
+    def clear(self):
+        self.samples.clear()
+
+    def add(self, t, position, velocity):
+        if self.samples and t < self.samples[-1][0]:
+            self.samples.clear()
+        self.samples.append((t, position, velocity))
+        while len(self.samples) > self.keep and self.samples[0][0] < t - self.span:
+            self.samples.popleft()
+
+    def at(self, t, max_extrapolation=0.0):
+        """(position, velocity) at ``t``: interpolated between the samples around it; outside them the nearest end
+        carried on with its velocity if it is at most ``max_extrapolation`` [s] away; else None."""
+        if not self.samples:
+            return None
+        times = [sample[0] for sample in self.samples]
+        i = bisect.bisect_left(times, t)
+        if 0 < i < len(times):
+            (t0, p0, v0), (t1, p1, v1) = self.samples[i - 1], self.samples[i]
+            f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
+            return p0 + f * (p1 - p0), v0 + f * (v1 - v0)
+        near_t, position, velocity = self.samples[0] if i == 0 else self.samples[-1]
+        if abs(near_t - t) > max_extrapolation:
+            return None
+        return position + velocity * (t - near_t), velocity
+
+
 class InertialVelocity:
     """The horizontal world velocity carried by the accelerometer between readings of a reference velocity
     (the flow's, corrected), pulled towards each reading with a gain that falls as the reading's uncertainty
@@ -322,7 +358,7 @@ class DroneEstimator:
         self.flow_weight_spread = 0.0    # how much the weight changes within weight_position_std of the estimate [-]
         self.inertial = InertialVelocity(params.inertial_gain, params.inertial_reference_std) \
             if params.inertial_gain > 0.0 else None
-        self.history = collections.deque()  # (time, position, velocity) after each prediction
+        self.history = StateHistory(HISTORY_SPAN)  # (time, position, velocity) after each prediction
         self.horizontal = HorizontalFilter(params.position_process_noise, params.flow_bias_process_noise,
                                            params.flow_velocity_std, params.initial_flow_bias_std,
                                            params.flow_scale_process_noise, params.initial_flow_scale_std)
@@ -386,9 +422,7 @@ class DroneEstimator:
         self.pending_correction = self._correction_left(dt)
         self.time = t
         if self.ready:
-            self.history.append((t, self._position_now(), self._velocity(t)))
-            while self.history and self.history[0][0] < t - HISTORY_SPAN:
-                self.history.popleft()
+            self.history.add(t, self._position_now(), self._velocity(t))
 
     def _position_now(self):
         return np.array([self.horizontal.x[0], self.horizontal.x[1], self.vertical.p])
@@ -397,15 +431,8 @@ class DroneEstimator:
         """(position, velocity) of the filter at an earlier time ``t``, interpolated in the history; the
         present ones when ``t`` is not in the past or the history does not reach back (then a fix is used as
         if taken now)."""
-        if self.time is None or t >= self.time or not self.history or t < self.history[0][0]:
-            return self._position_now(), self._velocity(self.time)
-        times = [h[0] for h in self.history]
-        i = bisect.bisect_left(times, t)
-        if i == 0:
-            return self.history[0][1], self.history[0][2]
-        (t0, p0, v0), (t1, p1, v1) = self.history[i - 1], self.history[i]
-        f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
-        return p0 + f * (p1 - p0), v0 + f * (v1 - v0)
+        past = self.history.at(t) if self.time is not None and t < self.time else None
+        return past if past is not None else (self._position_now(), self._velocity(self.time))
 
     def _correction_left(self, dt):
         """The part of the pending correction not yet published ``dt`` from now. A measurement update moves the

@@ -31,7 +31,6 @@ Inputs that are garbage (non-finite or implausible values, stamps from another t
 unknown words) are dropped with a warning naming the topic and what was wrong, once per topic and kind of
 problem every WARN_PERIOD (landing_msgs.input_check).
 """
-import bisect
 import collections
 import dataclasses
 import math
@@ -52,7 +51,7 @@ from std_msgs.msg import Bool, Empty, Float64, String
 
 from .camera_latency import CameraLatency
 from .controller import DroneState, PadPrediction
-from .estimator import DroneEstimator
+from .estimator import DroneEstimator, StateHistory
 from .flow_surface import FlowSurface, WeightForecast
 from .relative import RelativeTrack
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
@@ -61,6 +60,7 @@ from .state_machine import AIRBORNE_NAV, Inputs, State, TrackingStateMachine
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
 ESTIMATE_HISTORY = 2.0     # how far back the estimate is kept, to place a fix at its image's capture time [s]
+ESTIMATE_EXTRAPOLATION = 0.1  # a fix this far outside that history is placed with its nearest estimate [s]
 DELAY_SAMPLES = 15         # detections whose arrival-minus-capture median is the camera latency [-]
 LATENCY_PERIOD = 1.0       # how often that latency is published on platform_tracking/camera_latency [s of sim time]
 WORLD_FRAMES = ("world", "/world", "")
@@ -327,7 +327,7 @@ class TrackingNode:
         self.landing_allowed = True
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.camera_latency = CameraLatency(DELAY_SAMPLES, LATENCY_PERIOD)  # of the detections' arrival
-        self.estimates = collections.deque()  # (stamp, position, velocity) of the last seconds of odom_estimate
+        self.estimates = StateHistory(ESTIMATE_HISTORY, keep=2)  # odom_estimate's xy, to place fixes at their stamp
         self.relative = RelativeTrack(self.params.relative_fix_gain, self.params.relative_max_age)
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
@@ -365,24 +365,11 @@ class TrackingNode:
         stamp = stamp_of(msg)
         with self.lock:
             self.estimate = (stamp, state)
-            if self.estimates and stamp < self.estimates[-1][0]:
-                self.estimates.clear()
-            self.estimates.append((stamp, state.position[:2].copy(), state.velocity[:2].copy()))
-            while len(self.estimates) > 2 and self.estimates[0][0] < stamp - ESTIMATE_HISTORY:
-                self.estimates.popleft()
+            self.estimates.add(stamp, state.position[:2].copy(), state.velocity[:2].copy())
 
     def _estimate_at(self, t):
-        """(position, velocity) of the drone's estimate at ``t`` (lock held): interpolated, or None out of reach."""
-        times = [e[0] for e in self.estimates]
-        i = bisect.bisect_left(times, t)
-        if i == 0 or i == len(times):
-            near = self.estimates[0] if i == 0 and times else (self.estimates[-1] if times else None)
-            if near is None or abs(near[0] - t) > 0.1:
-                return None
-            return near[1] + near[2] * (t - near[0]), near[2]
-        (t0, p0, v0), (t1, p1, v1) = self.estimates[i - 1], self.estimates[i]
-        f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
-        return p0 + f * (p1 - p0), v0 + f * (v1 - v0)
+        """(position, velocity) of the drone's estimate at ``t`` (lock held), or None out of reach."""
+        return self.estimates.at(t, max_extrapolation=ESTIMATE_EXTRAPOLATION)
 
     def on_unseen(self, msg):
         problem = numbers_problem(MAX_SPEED_MPS, vector=(msg.vector.x, msg.vector.y)) or \
