@@ -15,10 +15,6 @@ namespace {
 double yawOf(const Eigen::Quaterniond& q) {
   return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
 }
-}  // namespace
-
-
-namespace {
 
 template <typename T>
 T required(const ros::NodeHandle& pnh, const std::string& key) {
