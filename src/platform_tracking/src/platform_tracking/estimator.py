@@ -385,12 +385,23 @@ class DroneEstimator:
         return self.orientation is not None and self.horizontal.initialised and self.vertical.initialised
 
     def _flow_fresh(self, t):
-        return self.flow_heading is not None and t - self.flow_time <= self.p.flow_timeout
+        return self.flow_heading is not None and t - self.flow_time <= self.p.flow_timeout \
+            and self._resting_velocity(t) is None
+
+    def _resting_velocity(self, t):
+        """Resting (the navdata says landed), the GPS velocity while it is fresh, else None. On its pad the drone
+        rides the vehicle while its flow, seeing the pad, reads a few cm/s whatever the vehicle does."""
+        if self.airborne or self.gps_velocity is None or t - self.gps_velocity_time > self.p.resting_gps_timeout:
+            return None
+        return np.array(self.gps_velocity, dtype=float)
 
     def _velocity(self, t):
-        """World velocity (x, y, z) the motion model integrates at ``t``: the flow while it is
-        fresh, else the last GPS velocity while that is fresh, else none (the position then holds
+        """World velocity (x, y, z) the motion model integrates at ``t``: resting, the GPS velocity; flying, the
+        flow while it is fresh, else the last GPS velocity while that is fresh, else none (the position then holds
         while its variance grows)."""
+        resting = self._resting_velocity(t)
+        if resting is not None:
+            return resting
         if self._flow_fresh(t):
             vx, vy = self.horizontal.world_velocity(self.flow_heading, self.yaw, self._unseen_now())
             return np.array([vx, vy, self.flow_heading[2]])
@@ -505,7 +516,9 @@ class DroneEstimator:
             seen = self.horizontal.world_velocity(self.flow_heading, self.yaw)
             vehicle_velocity = self._vehicle_velocity(t)
             speed = 0.0 if vehicle_velocity is None else float(np.hypot(*vehicle_velocity))
-            velocity = self.inertial.correct(t, seen + modelled, self.flow_weight_spread * speed)
+            resting = self._resting_velocity(t)
+            reference = seen + modelled if resting is None else resting[:2]
+            velocity = self.inertial.correct(t, reference, self.flow_weight_spread * speed)
             if self.inertial.fresh(t):
                 unseen = velocity - seen  # what the accelerometer says the flow did not see
                 if speed >= self.p.measured_weight_min_speed:

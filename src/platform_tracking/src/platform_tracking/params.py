@@ -71,6 +71,7 @@ class EstimatorParams:
     gps_velocity_std: float = spec(0.1, 0.001, 50.0, "m/s")
     flow_velocity_std: float = spec(0.05, 0.0, 5.0, "m/s")
     flow_timeout: float = spec(0.5, 0.01, 10.0, "s")
+    resting_gps_timeout: float = spec(1.0, 0.01, 10.0, "s")
     position_process_noise: float = spec(0.0003, 0.0, 10.0, "m^2/s")
     flow_bias_process_noise: float = spec(1e-6, 0.0, 1.0, "(m/s)^2/s")
     initial_flow_bias_std: float = spec(0.05, 0.0, 5.0, "m/s")
