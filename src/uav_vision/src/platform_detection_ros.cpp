@@ -11,11 +11,6 @@
 namespace uav_vision {
 
 namespace {
-// Heading [rad] of a rotation: about world z.
-double yawOf(const Eigen::Quaterniond& q) {
-  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
-}
-
 template <typename T>
 T required(const ros::NodeHandle& pnh, const std::string& key) {
   T value;
@@ -126,6 +121,7 @@ PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle p
       localizer_(config_.localizer, CameraMount::bottomCamera(config_.localizer.height.camera_below_base_link)),
       image_transport_(nh),
       attitudes_(config_.imu_max_offset),
+      estimates_(config_.odom_timeout),
       lockstep_(nh, "ardrone/bottom/image_raw") {
   platform_in_base_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_ardrone", 10);
   platform_in_world_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_world", 10);
@@ -235,35 +231,16 @@ void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg)
               Eigen::Vector3d(v.x, v.y, v.z).norm() <= landing_msgs::kMaxSpeedMps
           ? Eigen::Vector3d(v.x, v.y, v.z)
           : Eigen::Vector3d::Zero();
-  const ros::Time stamp = msg->header.stamp;
-  if (!estimates_.empty() && stamp < estimates_.back().stamp) estimates_.clear();  // time jumped back
   // The estimator publishes the IMU's attitude turned by the yaw drift it has learnt: what turns this frame's
   // IMU-aligned vector into the world the estimate (and the tracker) lives in.
+  const double stamp = msg->header.stamp.toSec();
   double heading_turn = 0.0;
   const auto& q = msg->pose.pose.orientation;
-  const auto imu = attitudes_.at(stamp.toSec());
+  const auto imu = attitudes_.at(stamp);
   if (imu && std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) &&
       q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z > 0.25)
-    heading_turn = std::remainder(yawOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z)) - yawOf(*imu), 2.0 * M_PI);
-  estimates_.push_back({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity, heading_turn});
-  while ((stamp - estimates_.front().stamp).toSec() > 1.0) estimates_.pop_front();
-}
-
-std::optional<PlatformDetectionRos::PositionEstimate> PlatformDetectionRos::estimateAt(const ros::Time& stamp) const {
-  if (estimates_.empty()) return std::nullopt;
-  const auto later = std::lower_bound(estimates_.begin(), estimates_.end(), stamp,
-                                      [](const PositionEstimate& e, const ros::Time& t) { return e.stamp < t; });
-  if (later != estimates_.end() && later != estimates_.begin()) {
-    const auto& a = *std::prev(later);
-    const double span = (later->stamp - a.stamp).toSec();
-    const double f = span > 0.0 ? (stamp - a.stamp).toSec() / span : 0.0;
-    const PositionEstimate& nearer = f < 0.5 ? a : *later;
-    return PositionEstimate{stamp, a.position + f * (later->position - a.position), nearer.velocity, nearer.heading_turn};
-  }
-  const PositionEstimate& nearest = later == estimates_.end() ? estimates_.back() : *later;
-  const double offset = (stamp - nearest.stamp).toSec();
-  if (std::abs(offset) > config_.odom_timeout) return std::nullopt;
-  return PositionEstimate{stamp, nearest.position + offset * nearest.velocity, nearest.velocity, nearest.heading_turn};
+    heading_turn = headingTurn(Eigen::Quaterniond(q.w, q.x, q.y, q.z), *imu);
+  estimates_.add({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity, heading_turn});
 }
 
 std::optional<landing_msgs::InputProblem> PlatformDetectionRos::inputProblem(const std_msgs::Header& header,
@@ -354,7 +331,7 @@ void PlatformDetectionRos::publish(const std_msgs::Header& image_header, const P
   platform_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.centre_in_body));
   if (observation.strip_found)
     indicator_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.strip_in_body));
-  const std::optional<PositionEstimate> drone = estimateAt(image_header.stamp);
+  const std::optional<DroneEstimate> drone = estimates_.at(image_header.stamp.toSec());
   if (!drone) {
     ROS_WARN_THROTTLE(config_.warn_period, "no %s within %.2f s of the frame: publishing the relative pad position only",
                       odom_sub_.getTopic().c_str(), config_.odom_timeout);

@@ -22,6 +22,7 @@
 #include <sensor_msgs/Range.h>
 
 #include "uav_vision/attitude_history.h"
+#include "uav_vision/estimate_history.h"
 #include "uav_vision/pad_localizer.h"
 #include "uav_vision/reading_history.h"
 
@@ -61,17 +62,6 @@ class PlatformDetectionRos {
   void onAltimeter(const landing_msgs::AltimeterConstPtr& msg);
   void onOdomEstimate(const nav_msgs::OdometryConstPtr& msg);
 
-  struct PositionEstimate {
-    ros::Time stamp;
-    Eigen::Vector3d position, velocity;  // world frame [m], [m/s]
-    // The estimate's heading minus the IMU's yaw at its stamp: the yaw drift the drone estimator has learnt [rad].
-    double heading_turn = 0.0;
-  };
-  // The drone's estimate at `stamp`: its position interpolated between two estimates, else moved from the
-  // nearest one (at most odom_timeout away) with its velocity, and the heading turn of the nearest.
-  // The estimate trails the camera by the estimator's latency, and the drone moves by metres per second, so
-  // the newest one is not good enough.
-  std::optional<PositionEstimate> estimateAt(const ros::Time& stamp) const;
   // A stamp too far from the clock, or (``frame`` not empty) a frame other than ``frame``.
   std::optional<landing_msgs::InputProblem> inputProblem(const std_msgs::Header& header, const std::string& frame) const;
   void publish(const std_msgs::Header& image_header, const PadObservation& observation);
@@ -90,7 +80,7 @@ class PlatformDetectionRos {
   AttitudeHistory attitudes_;  // the last second of IMU attitudes and rates
   ReadingHistory sonar_ranges_, altitudes_;  // the last second of sonar ranges and barometric altitudes
   double sonar_half_angle_ = 0.0;  // half the sonar's field_of_view [rad]
-  std::deque<PositionEstimate> estimates_;  // last second of ardrone/odom_estimate
+  EstimateHistory estimates_;  // the last second of ardrone/odom_estimate
   landing_msgs::LockstepAcker lockstep_;
   landing_msgs::RejectionLog rejections_;  // garbage on the inputs: what was wrong, once per topic and kind
 };
