@@ -6,7 +6,8 @@
 // uav_vision.rendered_frames (test/render_fixtures.py; scripts/rendered_benchmark renders thousands on the
 // fly and runs this on them). Each frame goes through PadLocalizer::observe() as in the node: IMU
 // attitude, the sonar's median of three readings around the frame, the barometer's mean over 0.1 s. Printed:
-//  - recall with the whole pad in view (found within 0.25 m of the truth), and on partial views;
+//  - recall with the whole pad in view (found within 0.25 m of the truth), and on partial views; at close range
+//    (camera below 0.5 m) with the centre marker wholly in view, and cut by the image border;
 //  - false detections: a pad reported where none is in view, or more than 0.25 m from the truth, as a
 //    share of all frames;
 //  - the horizontal centre error of the correct detections by camera height;
@@ -35,6 +36,7 @@ namespace {
 using uav_vision::RenderedFrame;
 
 constexpr double kFalseDistance = 0.25;  // a detection further than this from the truth is false [m]
+constexpr double kCloseRange = 0.5;      // camera heights below this: the last half metre of a landing [m]
 
 // CPU time of this thread [us]: what the detector costs on one core, whatever else the machine runs.
 double threadCpuMicros() {
@@ -144,6 +146,8 @@ int main(int argc, char** argv) {
 
   std::vector<double> observe_us, detect_us, remap_us;
   int whole = 0, whole_found = 0, partial = 0, partial_found = 0, none = 0, false_detections = 0;
+  // The last half metre: the centre marker wholly in view, or cut by the image border.
+  int close_whole = 0, close_whole_found = 0, close_cut = 0, close_cut_found = 0;
   std::map<std::string, ErrorStats> errors;
   ErrorStats all_errors, image_errors;
   struct Miss {
@@ -205,6 +209,13 @@ int main(int argc, char** argv) {
         ++none;
       }
       if (o.found && !correct) ++false_detections;
+      if (f.camera_height < kCloseRange && f.marker_corners_in_view == 4) {
+        ++close_whole;
+        close_whole_found += correct;
+      } else if (f.camera_height < kCloseRange && f.marker_corners_in_view > 0) {
+        ++close_cut;
+        close_cut_found += correct;
+      }
       if (correct) {
         errors[heightBand(f.camera_height)].errors.push_back(error);
         all_errors.errors.push_back(error);
@@ -233,6 +244,10 @@ int main(int argc, char** argv) {
               whole_found, whole);
   std::printf("  recall, pad partly in view:  %6.2f %% (%d of %d; often too little of it to place the centre)\n",
               partial ? 100.0 * partial_found / partial : NAN, partial_found, partial);
+  std::printf("  recall, close range, marker wholly in view: %6.2f %% (%d of %d; camera below %.1f m)\n",
+              close_whole ? 100.0 * close_whole_found / close_whole : NAN, close_whole_found, close_whole, kCloseRange);
+  std::printf("  recall, close range, marker cut by the border: %6.2f %% (%d of %d)\n",
+              close_cut ? 100.0 * close_cut_found / close_cut : NAN, close_cut_found, close_cut);
   std::printf("  false detections:            %6.3f %% of all frames (%d of %d; %d frames without the pad)\n",
               100.0 * false_detections / total, false_detections, total, none);
   all_errors.print("centre error, all");

@@ -186,7 +186,8 @@ std::string PadDetector::validate(const PadDetectorParams& p) {
 void PadDetector::computeMasks(const cv::Mat& image, ColorOrder order, double max_marker_area_px) const {
   const auto& p = params_;
   cv::split(image, planes_);
-  const cv::Mat& r = planes_[order == ColorOrder::kRgb ? 0 : 2];
+  red_plane_ = order == ColorOrder::kRgb ? 0 : 2;
+  const cv::Mat& r = planes_[red_plane_];
   const cv::Mat& g = planes_[1];
   const cv::Mat& b = planes_[order == ColorOrder::kRgb ? 2 : 0];
   // Saturating 8-bit arithmetic: a margin below zero is zero.
@@ -220,7 +221,7 @@ void PadDetector::computeMasks(const cv::Mat& image, ColorOrder order, double ma
   cv::bitwise_and(marker_mask_, channel_min_, marker_mask_);
   cv::medianBlur(marker_mask_, marker_mask_, 3);
   if (p.morphology_kernel_px > 1) cv::morphologyEx(marker_mask_, marker_mask_, cv::MORPH_OPEN, kernel_);
-  cv::findContours(marker_mask_, white_blobs_, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+  cv::findContours(marker_mask_, white_blobs_, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
   white_blob_red_share_.assign(white_blobs_.size(), 0.0);
   for (size_t i = 0; i < white_blobs_.size(); ++i) {
     const auto& blob = white_blobs_[i];
@@ -331,6 +332,8 @@ Detection PadDetector::detect(const cv::Mat& image, ColorOrder order, const Plan
       }
       result = marker;
     }
+    else if (!result.found && findCutMarker(size, *view, marker))
+      result = marker;
     else if (!result.found && marker.reason != "no centre marker in view")
       result.reason += "; " + marker.reason;
   }
@@ -797,6 +800,40 @@ double PadDetector::redCoverage(const PlaneView& view, const Eigen::Vector2d& ce
   return in_view > 0 ? double(red) / in_view : 0.0;
 }
 
+std::pair<double, double> PadDetector::markerColours(const PlaneView& view, const Eigen::Vector2d& centre,
+                                                     const Eigen::Vector2d (&axes)[2]) const {
+  // A grid over the square (short of its edges, which the image blurs) looked up in the marker mask, and a band
+  // around it (from 0.75 to 1.25 sides wide) in the red mask; only what is in view counts.
+  constexpr int kGrid = 9;
+  const double side = params_.pad.marker_side;
+  const cv::Size size = marker_mask_.size();
+  const double margin = params_.border_margin_px + 1.0;
+  auto lookUp = [&](const Eigen::Vector2d& point, const cv::Mat& mask) -> int {  // 1 set, 0 not, -1 not in view
+    const auto ideal = view.planeToPixel(point);
+    if (!ideal || std::abs(ideal->x - size.width / 2.0) > size.width || std::abs(ideal->y - size.height / 2.0) > size.height)
+      return -1;
+    const cv::Point2d pixel = frame_lens_ ? frame_lens_->distort(*ideal) : *ideal;
+    if (pixel.x < margin || pixel.y < margin || pixel.x > size.width - 1 - margin || pixel.y > size.height - 1 - margin)
+      return -1;
+    return mask.at<uint8_t>(cvRound(pixel.y), cvRound(pixel.x)) > 0 ? 1 : 0;
+  };
+  int inside_seen = 0, white = 0, around_seen = 0, red = 0;
+  for (int i = 0; i < kGrid; ++i)
+    for (int j = 0; j < kGrid; ++j) {
+      const double u = 2.0 * i / (kGrid - 1) - 1.0, v = 2.0 * j / (kGrid - 1) - 1.0;  // -1..1
+      const int inside = lookUp(centre + 0.4 * side * (u * axes[0] + v * axes[1]), marker_mask_);
+      if (inside >= 0) ++inside_seen, white += inside;
+      if (std::max(std::abs(u), std::abs(v)) < 0.99) continue;  // the band: the grid's outer ring, scaled
+      for (const double scale : {0.75, 1.25}) {
+        const int outside = lookUp(centre + scale * side * (u * axes[0] + v * axes[1]), red_colour_);
+        if (outside >= 0) ++around_seen, red += outside;
+      }
+    }
+  // Too little of the square in view to tell: not white.
+  return {inside_seen >= kGrid * kGrid / 5 ? double(white) / inside_seen : 0.0,
+          around_seen > 0 ? double(red) / around_seen : 0.0};
+}
+
 bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size,
                              const PlaneView& view, Detection& d) const {
   const auto& p = params_;
@@ -854,6 +891,122 @@ bool PadDetector::findMarker(const std::vector<std::vector<cv::Point>>& outlines
     d.outline = enclosing != outlines.end() ? *enclosing : blob;
   }
   return d.found;
+}
+
+bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Detection& d) const {
+  const auto& p = params_;
+  const double side = p.pad.marker_side;
+  for (size_t i = 0; i < white_blobs_.size(); ++i) {
+    const auto& blob = white_blobs_[i];
+    if (cv::contourArea(blob) < p.min_strip_area_px || white_blob_red_share_[i] < p.marker_min_surround) continue;
+    // The blob's outline away from the image border, on the plane: pieces of the marker's sides.
+    std::vector<cv::Point> inner;
+    std::vector<cv::Point> all(blob.begin(), blob.end());
+    for (const auto& q : blob)
+      if (!onBorder(q, size, p.border_margin_px + 1.0)) inner.push_back(q);
+    if (inner.size() == blob.size() || inner.size() < 8) continue;  // not cut (findMarker's), or hardly in view
+    toIdeal(inner, ideal_);
+    std::vector<Eigen::Vector2d> points;
+    points.reserve(ideal_.size());
+    for (const auto& q : ideal_)
+      if (const auto on_plane = view.pixelToPlane(q)) points.push_back(*on_plane);
+    if (points.size() < inner.size()) continue;
+    toIdeal(all, ideal_);
+    Eigen::Vector2d inside = Eigen::Vector2d::Zero();  // where the white is: the mean of its outline, border included
+    int inside_count = 0;
+    for (const auto& q : ideal_)
+      if (const auto on_plane = view.pixelToPlane(q)) inside += *on_plane, ++inside_count;
+    if (inside_count == 0) continue;
+    inside /= double(inside_count);
+    // The sides' direction (modulo 90 deg) from the outline's local directions, 5 points apart.
+    const int step = 5;
+    double c4 = 0.0, s4 = 0.0;
+    for (size_t k = 0; k + step < points.size(); ++k) {
+      const Eigen::Vector2d along = points[k + step] - points[k];
+      if (along.norm() > 2.0 * step * view.metresPerPixel()) continue;  // across a gap where the border was
+      const double angle = 4.0 * std::atan2(along.y(), along.x());
+      c4 += std::cos(angle);
+      s4 += std::sin(angle);
+    }
+    if (std::hypot(c4, s4) < 0.5 * double(points.size() / step)) {
+      d.reason = "cut centre marker: its sides are not straight";
+      continue;
+    }
+    const double theta = 0.25 * std::atan2(s4, c4);
+    const Eigen::Rotation2Dd to_square(-theta);
+    // Each outline point on a side across u (its u is cu +- side/2) or across v, by its local direction.
+    std::vector<double> us, vs;
+    for (size_t k = 0; k < points.size(); ++k) {
+      const size_t a = k >= 2 ? k - 2 : 0, b = std::min(points.size() - 1, k + 2);
+      const Eigen::Vector2d along = to_square * (points[b] - points[a]);
+      const Eigen::Vector2d q = to_square * points[k];
+      if (std::abs(along.y()) > 2.0 * std::abs(along.x())) us.push_back(q.x());  // runs along v: a side at fixed u
+      else if (std::abs(along.x()) > 2.0 * std::abs(along.y())) vs.push_back(q.y());
+    }
+    const Eigen::Vector2d inside_square = to_square * inside;
+    // A centre coordinate from the sides seen across one axis: both (their mid-point) or one (half a side
+    // inwards, towards the white).
+    auto place = [&](std::vector<double> values, double inside_value, double& centre) {
+      if (values.size() < 6) return false;
+      std::sort(values.begin(), values.end());
+      const double low = values[values.size() / 10], high = values[values.size() - 1 - values.size() / 10];
+      if (high - low > (1.0 + p.size_tolerance) * side) return false;
+      if (high - low > 0.5 * side) {  // both sides: their distance must be the marker's
+        if (std::abs(high - low - side) > p.size_tolerance * side) return false;
+        centre = 0.5 * (low + high);
+      } else {
+        const double at = values[values.size() / 2];
+        centre = inside_value > at ? at + 0.5 * side : at - 0.5 * side;
+      }
+      return true;
+    };
+    double cu = 0.0, cv_ = 0.0;
+    if (!place(us, inside_square.x(), cu) || !place(vs, inside_square.y(), cv_)) {
+      d.reason = "cut centre marker: too little of it in view to place its centre";
+      continue;
+    }
+    // Every outline point must lie on the fitted square's boundary, the square's part in view must be white
+    // and a band around it red: grey ground between the pad's edge and a corner of the image is as grey-white
+    // in some light, and its outline has straight pieces too.
+    const double tolerance = 0.25 * side;
+    int off = 0;
+    for (const auto& point : points) {
+      const Eigen::Vector2d q = to_square * point - Eigen::Vector2d(cu, cv_);
+      const double outside = std::max(std::abs(q.x()), std::abs(q.y())) - 0.5 * side;
+      if (std::abs(outside) > tolerance) ++off;
+    }
+    if (off > int(0.1 * double(points.size()))) {
+      d.reason = format("cut centre marker: %d of %d outline points off the fitted square", off, int(points.size()));
+      continue;
+    }
+    const Eigen::Vector2d centre = to_square.inverse() * Eigen::Vector2d(cu, cv_);
+    const Eigen::Vector2d axes[2] = {to_square.inverse() * Eigen::Vector2d::UnitX(),
+                                     to_square.inverse() * Eigen::Vector2d::UnitY()};
+    const auto [white_share, red_share] = markerColours(view, centre, axes);
+    if (!(white_share >= p.min_partial_coverage && red_share >= p.marker_min_surround) ||
+        !brighterThanTheRedAround(blob, planes_[red_plane_])) {
+      d.reason = format("cut centre marker: the fitted square is %.0f%% white, %.0f%% red around", 100 * white_share,
+                        100 * red_share);
+      continue;
+    }
+    const auto centre_px = view.planeToPixel(centre);
+    if (!centre_px) continue;
+    d = Detection();
+    d.found = true;
+    d.marker = true;
+    d.partial = true;
+    d.centre_px = *centre_px;
+    const Eigen::Rotation2Dd to_plane(theta);
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d corner(cu + ((k == 1 || k == 2) ? 0.5 : -0.5) * side, cv_ + (k >= 2 ? 0.5 : -0.5) * side);
+      if (const auto px = view.planeToPixel(to_plane * corner)) d.corners_px[k] = *px;
+    }
+    d.side_px = side / view.metresPerPixel();
+    d.quality = clamp01(0.6 * (1.0 - double(off) / double(points.size())));
+    d.outline = blob;
+    return true;
+  }
+  return false;
 }
 
 }  // namespace uav_vision

@@ -12,12 +12,15 @@
 //    plane and a 1 m square with its strip is fitted to them, which needs the view geometry;
 //  - close range (no whole pad): the white centre marker, wholly in view and surrounded by red, is the
 //    pad centre. In the last half metre above the pad the red fills the image and has no edge in view.
+//    Cut by the image border (the drone 0.1-0.25 m off the centre), a square of the marker's size is fitted
+//    to its sides in view (both of their directions needed), checked white inside and red around.
 // The green strip's centre gives the pad's forward direction.
 #pragma once
 
 #include <array>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -132,6 +135,14 @@ class PadDetector {
   // d.reason) when none qualifies.
   bool findMarker(const std::vector<std::vector<cv::Point>>& outlines, const cv::Size& size, const PlaneView& view,
                   Detection& d) const;
+  // The centre marker cut by the image border (close range, the drone 0.1-0.25 m off the centre): a square of
+  // the marker's size fitted to its sides in view, which must show both of its directions; false (with
+  // d.reason) when none qualifies.
+  bool findCutMarker(const cv::Size& size, const PlaneView& view, Detection& d) const;
+  // Of a marker-sized square (centre and axes on the plane): the share of its part in view that is white, and of
+  // a band around it that is red [0..1].
+  std::pair<double, double> markerColours(const PlaneView& view, const Eigen::Vector2d& centre,
+                                          const Eigen::Vector2d (&axes)[2]) const;
 
   PadDetectorParams params_;
   cv::Mat kernel_;
@@ -143,6 +154,7 @@ class PadDetector {
   mutable std::shared_ptr<const LensUndistortion> lens_;      // of the last distorted camera seen
   mutable const LensUndistortion* frame_lens_ = nullptr;       // of the frame in work (null: no distortion)
   mutable std::vector<double> white_blob_red_share_;  // per white blob, redShareAround
+  mutable int red_plane_ = 0;                          // index of the red channel in planes_
 };
 
 }  // namespace uav_vision

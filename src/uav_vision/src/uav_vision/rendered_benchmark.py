@@ -1,11 +1,13 @@
 """Detection benchmark on thousands of bottom-camera frames rendered on the fly (nothing is kept).
 
     rosrun uav_vision rendered_benchmark [--frames 3000] [--profiles realistic harsh] [--seed 1] [--keep DIR]
+                                         [--views approach|close]
 
 For each realism profile the same seeded views are rendered with mujoco_sim (uav_vision.rendered_frames)
 into a temporary directory, and ``detector_benchmark`` scores them: recall with the whole pad in view,
 false detections (a pad reported where none is, or more than 0.25 m from the truth) as a share of all
-frames, centre error statistics, frames per second on one core.
+frames, recall at close range (camera below 0.5 m, the centre marker at least partly in view), centre error
+statistics, frames per second on one core.
 
 The views are those of a landing approach: the camera 0.3-5 m above the pad, the pad anywhere from the
 image centre to out of view, the drone tilted up to 15 deg, moving relative to the vehicle up to 1.5 m/s
@@ -62,9 +64,28 @@ def sample_view(rng, renderer):
                 band="bench")
 
 
-def render_set(profile, frames, seed, out):
+def sample_close_view(rng, renderer):
+    """A view of the last half metre of a landing: the camera 0.3-0.7 m above the pad and up to 0.3 m off its
+    centre (the centre marker wholly in view, cut by the image border, or out of view), tilted up to 10 deg,
+    moving relative to the vehicle up to 1 m/s, no false target."""
+    height, radius, bearing = rng.uniform(0.3, 0.7), rng.uniform(0.0, 0.3), rng.uniform(-math.pi, math.pi)
+    tilt, tilt_dir = math.radians(rng.uniform(0.0, 10.0)), rng.uniform(-math.pi, math.pi)
+    speed, heading = rng.uniform(0.0, 1.0), rng.uniform(-math.pi, math.pi)
+    return View(camera_offset=(radius * math.cos(bearing), radius * math.sin(bearing)), camera_height=height,
+                roll=tilt * math.cos(tilt_dir), pitch=tilt * math.sin(tilt_dir), yaw=rng.uniform(-math.pi, math.pi),
+                vehicle_yaw=rng.uniform(-math.pi, math.pi), vehicle_position=tuple(rng.uniform(-3.0, 3.0, 2)),
+                vehicle_speed=rng.uniform(0.0, MAX_SPEED["summit_xl"]),
+                relative_velocity=(speed * math.cos(heading), speed * math.sin(heading), rng.uniform(-0.5, 0.1)),
+                body_rates=tuple(np.clip(rng.normal(0.0, 0.3, 3), -1.0, 1.0)), false_target=False, band="close")
+
+
+VIEWS = {"approach": sample_view, "close": sample_close_view}
+
+
+def render_set(profile, frames, seed, out, views="approach"):
     """Renders ``frames`` views of ``profile`` into ``out`` (PNGs and truth.csv); the views depend on the seed
-    only, so every profile sees the same ones."""
+    only, so every profile sees the same ones. ``views``: ``approach`` (sample_view) or ``close``
+    (sample_close_view, over the Summit XL only)."""
     rng = np.random.default_rng(seed)
     rows = []
     renderer = None
@@ -73,9 +94,9 @@ def render_set(profile, frames, seed, out):
         if index % FRAMES_PER_SUN == 0:
             if renderer is not None:
                 renderer.close()
-            vehicle = "car" if rng.random() < CAR_SHARE else "summit_xl"
+            vehicle = "car" if views == "approach" and rng.random() < CAR_SHARE else "summit_xl"
             renderer = FrameRenderer(vehicle, profile, seed=seed * 100003 + index // FRAMES_PER_SUN)
-        renderer.set_view(sample_view(rng, renderer))
+        renderer.set_view(VIEWS[views](rng, renderer))
         name = "%05d_%s.png" % (index, renderer.vehicle)
         image, row = renderer.render(name)
         save_png(os.path.join(out, name), image, compression=1)
@@ -106,6 +127,9 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=1, help="seed of the views and the simulators (default 1)")
     parser.add_argument("--keep", help="keep the rendered frames in DIR/<profile> instead of a temporary directory")
     parser.add_argument("--worst", type=int, default=5, help="list this many of the worst frames (default 5)")
+    parser.add_argument("--views", choices=sorted(VIEWS), default="approach",
+                        help="approach: 0.3-5 m up, the pad anywhere (default); close: the last half metre, 0.3-0.7 m up "
+                             "and up to 0.3 m off the centre")
     args = parser.parse_args(argv)
     if args.frames < 1:
         parser.error("--frames must be at least 1")
@@ -119,8 +143,8 @@ def main(argv=None):
         out = os.path.join(args.keep, profile) if args.keep else tempfile.mkdtemp(prefix="uav_vision_%s_" % profile)
         os.makedirs(out, exist_ok=True)
         try:
-            print("== %s: rendering %d frames (seed %d)" % (profile, args.frames, args.seed), flush=True)
-            render_set(profile, args.frames, args.seed, out)
+            print("== %s: rendering %d %s views (seed %d)" % (profile, args.frames, args.views, args.seed), flush=True)
+            render_set(profile, args.frames, args.seed, out, args.views)
             status |= subprocess.call([benchmark, "--dir", out, "--worst", str(args.worst)])
         finally:
             if not args.keep:
