@@ -901,7 +901,6 @@ bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Det
     if (cv::contourArea(blob) < p.min_strip_area_px || white_blob_red_share_[i] < p.marker_min_surround) continue;
     // The blob's outline away from the image border, on the plane: pieces of the marker's sides.
     std::vector<cv::Point> inner;
-    std::vector<cv::Point> all(blob.begin(), blob.end());
     for (const auto& q : blob)
       if (!onBorder(q, size, p.border_margin_px + 1.0)) inner.push_back(q);
     if (inner.size() == blob.size() || inner.size() < 8) continue;  // not cut (findMarker's), or hardly in view
@@ -911,7 +910,7 @@ bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Det
     for (const auto& q : ideal_)
       if (const auto on_plane = view.pixelToPlane(q)) points.push_back(*on_plane);
     if (points.size() < inner.size()) continue;
-    toIdeal(all, ideal_);
+    toIdeal(blob, ideal_);
     Eigen::Vector2d inside = Eigen::Vector2d::Zero();  // where the white is: the mean of its outline, border included
     int inside_count = 0;
     for (const auto& q : ideal_)
@@ -921,14 +920,17 @@ bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Det
     // The sides' direction (modulo 90 deg) from the outline's local directions, 5 points apart.
     const int step = 5;
     double c4 = 0.0, s4 = 0.0;
+    int directions = 0;
     for (size_t k = 0; k + step < points.size(); ++k) {
       const Eigen::Vector2d along = points[k + step] - points[k];
       if (along.norm() > 2.0 * step * view.metresPerPixel()) continue;  // across a gap where the border was
       const double angle = 4.0 * std::atan2(along.y(), along.x());
       c4 += std::cos(angle);
       s4 += std::sin(angle);
+      ++directions;
     }
-    if (std::hypot(c4, s4) < 0.5 * double(points.size() / step)) {
+    // Their mean resultant (modulo 90 deg) at least 0.5: mostly straight and square, a few rounded corners.
+    if (directions == 0 || std::hypot(c4, s4) < 0.5 * directions) {
       d.reason = "cut centre marker: its sides are not straight";
       continue;
     }
