@@ -822,11 +822,17 @@ std::pair<double, double> PadDetector::markerColours(const PlaneView& view, cons
     for (int j = 0; j < kGrid; ++j) {
       const double u = 2.0 * i / (kGrid - 1) - 1.0, v = 2.0 * j / (kGrid - 1) - 1.0;  // -1..1
       const int inside = lookUp(centre + 0.4 * side * (u * axes[0] + v * axes[1]), marker_mask_);
-      if (inside >= 0) ++inside_seen, white += inside;
+      if (inside >= 0) {
+        ++inside_seen;
+        white += inside;
+      }
       if (std::max(std::abs(u), std::abs(v)) < 0.99) continue;  // the band: the grid's outer ring, scaled
       for (const double scale : {0.75, 1.25}) {
         const int outside = lookUp(centre + scale * side * (u * axes[0] + v * axes[1]), red_colour_);
-        if (outside >= 0) ++around_seen, red += outside;
+        if (outside >= 0) {
+          ++around_seen;
+          red += outside;
+        }
       }
     }
   // Too little of the square in view to tell: not white.
@@ -913,8 +919,12 @@ bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Det
     toIdeal(blob, ideal_);
     Eigen::Vector2d inside = Eigen::Vector2d::Zero();  // where the white is: the mean of its outline, border included
     int inside_count = 0;
-    for (const auto& q : ideal_)
-      if (const auto on_plane = view.pixelToPlane(q)) inside += *on_plane, ++inside_count;
+    for (const auto& q : ideal_) {
+      if (const auto on_plane = view.pixelToPlane(q)) {
+        inside += *on_plane;
+        ++inside_count;
+      }
+    }
     if (inside_count == 0) continue;
     inside /= double(inside_count);
     // The sides' direction (modulo 90 deg) from the outline's local directions, 5 points apart.
