@@ -945,7 +945,7 @@ bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Det
       continue;
     }
     const double theta = 0.25 * std::atan2(s4, c4);
-    const Eigen::Rotation2Dd to_square(-theta);
+    const Eigen::Rotation2Dd to_square(-theta), to_plane(theta);
     // Each outline point on a side across u (its u is cu +- side/2) or across v, by its local direction.
     std::vector<double> us, vs;
     for (size_t k = 0; k < points.size(); ++k) {
@@ -991,9 +991,8 @@ bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Det
       d.reason = format("cut centre marker: %d of %d outline points off the fitted square", off, int(points.size()));
       continue;
     }
-    const Eigen::Vector2d centre = to_square.inverse() * Eigen::Vector2d(cu, cv_);
-    const Eigen::Vector2d axes[2] = {to_square.inverse() * Eigen::Vector2d::UnitX(),
-                                     to_square.inverse() * Eigen::Vector2d::UnitY()};
+    const Eigen::Vector2d centre = to_plane * Eigen::Vector2d(cu, cv_);
+    const Eigen::Vector2d axes[2] = {to_plane * Eigen::Vector2d::UnitX(), to_plane * Eigen::Vector2d::UnitY()};
     const auto [white_share, red_share] = markerColours(view, centre, axes);
     if (!(white_share >= p.min_partial_coverage && red_share >= p.marker_min_surround) ||
         !brighterThanTheRedAround(blob, planes_[red_plane_])) {
@@ -1008,7 +1007,6 @@ bool PadDetector::findCutMarker(const cv::Size& size, const PlaneView& view, Det
     d.marker = true;
     d.partial = true;
     d.centre_px = *centre_px;
-    const Eigen::Rotation2Dd to_plane(theta);
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector2d corner(cu + ((k == 1 || k == 2) ? 0.5 : -0.5) * side, cv_ + (k >= 2 ? 0.5 : -0.5) * side);
       if (const auto px = view.planeToPixel(to_plane * corner)) d.corners_px[k] = *px;
