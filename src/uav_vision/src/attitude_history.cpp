@@ -6,10 +6,8 @@
 namespace uav_vision {
 
 void AttitudeHistory::add(double stamp, const Eigen::Quaterniond& orientation, const Eigen::Vector3d& body_rate) {
-  if (!samples_.empty() && stamp < samples_.back().stamp) samples_.clear();
   const Eigen::Vector3d rate = body_rate.allFinite() ? body_rate : Eigen::Vector3d::Zero();
-  samples_.push_back({ stamp, orientation.normalized(), rate });
-  while (samples_.size() > 1 && stamp - samples_.front().stamp > keep_) samples_.pop_front();
+  samples_.add({stamp, orientation.normalized(), rate});
 }
 
 Eigen::Quaterniond AttitudeHistory::turned(const Sample& sample, double dt) {
@@ -21,8 +19,7 @@ Eigen::Quaterniond AttitudeHistory::turned(const Sample& sample, double dt) {
 
 std::optional<Eigen::Quaterniond> AttitudeHistory::at(double stamp) const {
   if (samples_.empty()) return std::nullopt;
-  const auto later = std::lower_bound(samples_.begin(), samples_.end(), stamp,
-                                      [](const Sample& s, double t) { return s.stamp < t; });
+  const auto later = samples_.firstNotBefore(stamp);
   if (later != samples_.end() && later != samples_.begin()) {
     const Sample& earlier = *std::prev(later);
     const double span = later->stamp - earlier.stamp;

@@ -16,15 +16,12 @@ double headingTurn(const Eigen::Quaterniond& estimate, const Eigen::Quaterniond&
 }
 
 void EstimateHistory::add(const DroneEstimate& estimate) {
-  if (!estimates_.empty() && estimate.stamp < estimates_.back().stamp) estimates_.clear();
-  estimates_.push_back(estimate);
-  while (estimate.stamp - estimates_.front().stamp > keep_) estimates_.pop_front();
+  estimates_.add(estimate);
 }
 
 std::optional<DroneEstimate> EstimateHistory::at(double stamp) const {
   if (estimates_.empty()) return std::nullopt;
-  const auto later = std::lower_bound(estimates_.begin(), estimates_.end(), stamp,
-                                      [](const DroneEstimate& e, double t) { return e.stamp < t; });
+  const auto later = estimates_.firstNotBefore(stamp);
   if (later != estimates_.end() && later != estimates_.begin()) {
     const DroneEstimate& earlier = *std::prev(later);
     const double span = later->stamp - earlier.stamp;

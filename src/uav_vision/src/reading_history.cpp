@@ -7,9 +7,7 @@
 namespace uav_vision {
 
 void ReadingHistory::add(double stamp, double value) {
-  if (!readings_.empty() && stamp < readings_.back().stamp) readings_.clear();
-  readings_.push_back({stamp, value});
-  while (readings_.size() > 1 && stamp - readings_.front().stamp > keep_) readings_.pop_front();
+  readings_.add({stamp, value});
 }
 
 double ReadingHistory::nearest(double stamp, double max_offset) const {
@@ -18,8 +16,7 @@ double ReadingHistory::nearest(double stamp, double max_offset) const {
 
 double ReadingHistory::medianNear(double stamp, double max_offset, int count) const {
   // Walk outwards from the stamp, taking the nearer of the two neighbours each time.
-  auto later = std::lower_bound(readings_.begin(), readings_.end(), stamp,
-                                [](const Reading& r, double t) { return r.stamp < t; });
+  auto later = readings_.firstNotBefore(stamp);
   auto earlier = later;
   std::vector<double> values;  // nearest first
   while (int(values.size()) < count) {

@@ -7,10 +7,11 @@
 // the attitude is interpolated (slerp).
 #pragma once
 
-#include <deque>
 #include <optional>
 
 #include <Eigen/Geometry>
+
+#include "uav_vision/stamped_window.h"
 
 namespace uav_vision {
 
@@ -18,7 +19,7 @@ class AttitudeHistory {
  public:
   // `max_offset`: how far from the nearest sample an attitude may be propagated [s];
   // `keep`: how much history is kept [s].
-  explicit AttitudeHistory(double max_offset = 0.05, double keep = 1.0) : max_offset_(max_offset), keep_(keep) {}
+  explicit AttitudeHistory(double max_offset = 0.05, double keep = 1.0) : max_offset_(max_offset), samples_(keep) {}
 
   // One IMU sample: `orientation` = rotation world <- body (unit), `body_rate` = angular velocity in the
   // body frame [rad/s]. A stamp older than the newest one restarts the history (time jumped back).
@@ -37,8 +38,8 @@ class AttitudeHistory {
   };
   static Eigen::Quaterniond turned(const Sample& sample, double dt);
 
-  double max_offset_, keep_;
-  std::deque<Sample> samples_;
+  double max_offset_;
+  StampedWindow<Sample> samples_;
 };
 
 }  // namespace uav_vision

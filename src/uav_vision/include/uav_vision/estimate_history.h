@@ -7,11 +7,12 @@
 // drift the drone estimator has learnt, which turns a vector in the IMU's world axes into the estimate's world.
 #pragma once
 
-#include <deque>
 #include <optional>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+
+#include "uav_vision/stamped_window.h"
 
 namespace uav_vision {
 
@@ -30,7 +31,7 @@ class EstimateHistory {
   // `max_extrapolation`: how far from the nearest estimate a position may be moved with its velocity [s];
   // `keep`: how much history is kept [s].
   explicit EstimateHistory(double max_extrapolation, double keep = 1.0)
-      : max_extrapolation_(max_extrapolation), keep_(keep) {}
+      : max_extrapolation_(max_extrapolation), estimates_(keep) {}
 
   // A stamp older than the newest one restarts the history (time jumped back).
   void add(const DroneEstimate& estimate);
@@ -43,8 +44,8 @@ class EstimateHistory {
   bool empty() const { return estimates_.empty(); }
 
  private:
-  double max_extrapolation_, keep_;
-  std::deque<DroneEstimate> estimates_;
+  double max_extrapolation_;
+  StampedWindow<DroneEstimate> estimates_;
 };
 
 }  // namespace uav_vision

@@ -9,14 +9,14 @@
 // of those close to it, against its noise.
 #pragma once
 
-#include <deque>
+#include "uav_vision/stamped_window.h"
 
 namespace uav_vision {
 
 class ReadingHistory {
  public:
   // `keep`: how much history is kept [s].
-  explicit ReadingHistory(double keep = 1.0) : keep_(keep) {}
+  explicit ReadingHistory(double keep = 1.0) : readings_(keep) {}
 
   // A reading (any value: +inf is "nothing in range" for a sonar). A stamp older than the newest one
   // restarts the history (time jumped back).
@@ -39,8 +39,7 @@ class ReadingHistory {
   struct Reading {
     double stamp, value;
   };
-  double keep_;
-  std::deque<Reading> readings_;
+  StampedWindow<Reading> readings_;
 };
 
 }  // namespace uav_vision
