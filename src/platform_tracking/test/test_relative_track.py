@@ -24,6 +24,21 @@ def test_over_the_pad_the_flow_alone_carries_the_relative_position_whatever_the_
     assert truth[0] < -0.15   # the pad fell 0.3 m behind: what the world route would learn late
 
 
+def test_while_the_vehicle_speeds_up_the_firmwares_lag_behind_it_is_added_back():
+    """The firmware's velocity estimate lags the vehicle's acceleration by its flow's response time: over the pad
+    (weight 1) at 1 m/s^2 it reads the drone 0.17 m/s faster relative to the pad than it is."""
+    flow_lag, acceleration = 0.17, np.array([1.0, 0.0])
+    track = RelativeTrack(fix_gain=0.5, max_age=1.0, flow_lag=flow_lag)
+    lagless = RelativeTrack(fix_gain=0.5, max_age=1.0)
+    pad_v, drone_v = 2.0, 1.8   # the drone 0.2 m/s behind the pad
+    for t in (0.0, 0.05):
+        for each in (track, lagless):
+            each.add_fix(0.0, (0.05, 0.0))
+            each.add_motion(t, (drone_v - pad_v + flow_lag * acceleration[0], 0.0), 1.0, (pad_v, 0.0), acceleration)
+    assert track.at(0.05)[1] == pytest.approx((0.2, 0.0))
+    assert lagless.at(0.05)[1] == pytest.approx((0.2 - flow_lag, 0.0))
+
+
 def test_off_the_pad_the_part_of_the_pads_velocity_the_flow_does_not_see_comes_from_the_prediction():
     track = RelativeTrack(fix_gain=0.5, max_age=1.0)
     track.add_fix(0.0, (0.0, 0.0))

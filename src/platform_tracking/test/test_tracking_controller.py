@@ -314,3 +314,11 @@ def test_a_prediction_moved_to_a_place_and_velocity_keeps_its_changes():
     assert moved.position_at(t) == pytest.approx(before + (0.2, 0.0, 0.0))
     assert moved.position_at(t + 0.4) == pytest.approx(pad.position_at(t + 0.4) + (0.2 + 0.5 * 0.4, 0.0, 0.0))
     assert moved.position_at(t)[2] == pytest.approx(0.5)
+
+
+def test_the_pads_acceleration_is_read_off_the_predicted_path():
+    times = [0.1 * k for k in range(21)]
+    speeding_up = PadPrediction(0.0, (0.0, 0.0, 0.5), (1.0, 0.0, 0.0), times,
+                                [(1.0 * t + 0.5 * 0.8 * t ** 2, 0.0, 0.5) for t in times])
+    assert speeding_up.acceleration_at(1.0)[:2] == pytest.approx((0.8, 0.0), abs=1e-6)
+    assert speeding_up.acceleration_at(5.0) == pytest.approx((0.0, 0.0, 0.0))   # beyond the path

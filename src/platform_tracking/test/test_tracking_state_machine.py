@@ -538,6 +538,15 @@ def test_final_descent_is_called_off_when_the_error_grows():
     assert "commit_abort_error" in f.lines[-1] and not f.sm.committed
 
 
+def test_final_descent_is_not_called_off_once_too_low_to_stop_above_the_pad():
+    f = landing_flight(height=P.gate_height)
+    f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
+    low = 0.5 * (P.land_height + P.commit_abort_min_height)
+    out = f.step(drone=drone(height=low), pad=pad(f.t + 1 / 30, x=P.commit_abort_error + 0.05))
+    assert f.sm.committed and out.command.vz == pytest.approx(-P.final_descent_rate)
+    assert out.command.vx > 0.0  # still tracking the pad that draws away
+
+
 def test_final_descent_is_called_off_when_the_pad_draws_away_though_the_error_is_still_small():
     f = landing_flight(height=P.gate_height)
     f.run(P.gate_ready_time + 0.1, make=fresh(height=P.gate_height))
@@ -629,6 +638,19 @@ def test_touchdown_is_not_committed_while_the_relative_speed_is_large():
     f = landing_flight(height=P.gate_height)
     outs = f.run(1.0, make=fresh(x=0.02, vx=0.5, height=P.gate_height))   # pad 0.5 m/s faster than the drone
     assert not any(o.send_land for o in outs)
+
+
+def test_touchdown_is_not_committed_while_the_drone_drifts_off_the_pad_it_is_still_over():
+    # 0.07 m off and 0.2 m/s apart (under gate_relative_speed): from the gate, the touchdown comes
+    # gate_height / final_descent_rate later, by when the gap has grown past gate_error.
+    drift = 0.2
+    assert 0.07 + drift * P.gate_height / P.final_descent_rate > P.gate_error
+    drifting_off = landing_flight(height=P.gate_height)
+    drifting_off.run(1.0, make=fresh(x=0.07, vx=drift, height=P.gate_height))
+    assert not drifting_off.sm.committed
+    closing_in = landing_flight(height=P.gate_height)
+    closing_in.run(1.0, make=fresh(x=0.07, vx=-drift, height=P.gate_height))
+    assert closing_in.sm.committed
 
 
 def test_gate_timeout_starts_a_retry():

@@ -142,6 +142,14 @@ class PadPrediction:
             return (1.0 - w) * self.velocity + w * ahead
         return (self.position_at(t + half_span) - self.position_at(t - half_span)) / (2.0 * half_span)
 
+    def acceleration_at(self, t, span=0.2):
+        """The pad's acceleration (world) at ``t``: the change of the path's velocity across ``span`` [m/s^2];
+        zero where the path does not reach."""
+        v0, v1 = self.path_velocity_at(t - 0.5 * span), self.path_velocity_at(t + 0.5 * span)
+        if v0 is None or v1 is None:
+            return np.zeros(3)
+        return (v1 - v0) / span
+
     def speed_change_at(self, t, span=0.3):
         """Rate of change of the pad's speed over the next ``span`` seconds of the path [m/s^2] (braking
         < 0); 0 where the path does not reach. Turning at constant speed does not count."""

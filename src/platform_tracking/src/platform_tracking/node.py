@@ -328,7 +328,8 @@ class TrackingNode:
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.camera_latency = CameraLatency(DELAY_SAMPLES, LATENCY_PERIOD)  # of the detections' arrival
         self.estimates = StateHistory(ESTIMATE_HISTORY, keep=2)  # odom_estimate's xy, to place fixes at their stamp
-        self.relative = RelativeTrack(self.params.relative_fix_gain, self.params.relative_max_age)
+        self.relative = RelativeTrack(self.params.relative_fix_gain, self.params.relative_max_age,
+                                      flow_lag=self.params.flow_time_lead)
         self.me = rospy.get_caller_id()
         self.lockstep = LockstepAcker(period=1.0 / self.params.rate_hz)
 
@@ -385,7 +386,9 @@ class TrackingNode:
             if drone is not None:
                 pad = self._pad_prediction()
                 pad_velocity = np.zeros(2) if pad is None else pad.velocity[:2]
-                self.relative.add_motion(self.unseen[0], drone[1] - self.unseen[1], self.unseen[2], pad_velocity)
+                pad_acceleration = np.zeros(2) if pad is None else pad.acceleration_at(self.unseen[0])[:2]
+                self.relative.add_motion(self.unseen[0], drone[1] - self.unseen[1], self.unseen[2], pad_velocity,
+                                         pad_acceleration)
 
     def on_world_fix(self, msg):
         """The camera's fix of the pad in the world, placed with the drone's estimate at the image's capture time:

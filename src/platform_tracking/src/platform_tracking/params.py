@@ -168,7 +168,7 @@ class TrackingParams:
     retry_height: float = spec(1.5, 0.2, 50.0, "m")
     abort_error: float = spec(1.5, 0.05, 50.0, "m")
     gate_height: float = spec(0.35, 0.05, 5.0, "m")
-    commit_height: float = spec(0.6, 0.05, 5.0, "m")
+    commit_height: float = spec(0.45, 0.05, 5.0, "m")
     gate_error: float = spec(0.1, 0.01, 5.0, "m")
     gate_relative_speed: float = spec(0.25, 0.01, 10.0, "m/s")
     gate_ready_time: float = spec(0.2, 0.0, 10.0, "s")
@@ -182,6 +182,7 @@ class TrackingParams:
     land_height: float = spec(0.06, 0.0, 5.0, "m")
     commit_abort_error: float = spec(0.2, 0.01, 5.0, "m")
     commit_abort_lookahead: float = spec(0.3, 0.0, 2.0, "s")
+    commit_abort_min_height: float = spec(0.1, 0.0, 5.0, "m")
     abort_to_gate: bool = spec(True)
     blind_height: float = spec(0.35, 0.0, 5.0, "m")
     land_ack_timeout: float = spec(1.0, 0.05, 30.0, "s")
@@ -210,6 +211,9 @@ class TrackingParams:
                 self.gate_height, self.commit_height, self.retry_height))
         if not self.land_height < self.gate_height:
             problems.append("expected land_height < gate_height, got %g, %g m" % (self.land_height, self.gate_height))
+        if not self.land_height <= self.commit_abort_min_height < self.gate_height:
+            problems.append("expected land_height <= commit_abort_min_height < gate_height, got %g, %g, %g m" % (
+                self.land_height, self.commit_abort_min_height, self.gate_height))
         if not self.gate_error < self.commit_abort_error:
             problems.append("expected gate_error < commit_abort_error, got %g, %g m" % (
                 self.gate_error, self.commit_abort_error))

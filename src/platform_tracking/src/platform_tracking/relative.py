@@ -9,7 +9,12 @@ camera no longer sees the pad's centre, it drifted 0.15 m from the pad within a 
 touchdowns that ended 0.25 m from the centre). So, with ``seen`` the flow's velocity (world frame) and ``v_pad``
 the predicted pad velocity:
 
-    d/dt (pad - drone) = v_pad - v_drone = (1 - w) v_pad - seen     (seen = v_drone - w v_pad)
+    d/dt (pad - drone) = v_pad - v_drone = (1 - w) v_pad - seen + w T_f a_pad     (seen = v_drone - w v_pad + w T_f a_pad)
+
+The last term: the firmware's velocity estimate follows its IMU, which feels the drone's accelerations but not the
+vehicle's, and takes the flow in over ``T_f`` (``flow_lag``): while the vehicle speeds up at ``a_pad`` the estimate
+lags its share of it by T_f a_pad (0.17 m/s on a Summit XL's 1 m/s^2 ramp, where touchdowns committed on a relative
+speed of 0.02-0.06 m/s met one of 0.24-0.26 m/s and ended 0.17-0.19 m from the centre).
 
 integrated from the latest fix of the pad relative to the drone (each fix pulls the track towards it by
 ``fix_gain``, at the fix's capture time, and the motion since is integrated again), for at most ``max_age`` after
@@ -26,8 +31,8 @@ class RelativeTrack:
 
     HISTORY = 2.0  # how long the flow's samples are kept: a fix arrives up to a camera latency late [s]
 
-    def __init__(self, fix_gain, max_age):
-        self.fix_gain, self.max_age = fix_gain, max_age
+    def __init__(self, fix_gain, max_age, flow_lag=0.0):
+        self.fix_gain, self.max_age, self.flow_lag = fix_gain, max_age, flow_lag
         self.motion = collections.deque()  # (time, rate of pad - drone) from each flow sample, oldest first
         self.anchor = None                 # (time, relative position) of the latest fix, filtered
 
@@ -35,12 +40,14 @@ class RelativeTrack:
         self.motion.clear()
         self.anchor = None
 
-    def add_motion(self, t, seen_xy, weight, pad_velocity_xy):
+    def add_motion(self, t, seen_xy, weight, pad_velocity_xy, pad_acceleration_xy=(0.0, 0.0)):
         """A flow sample at ``t``: its velocity (world x, y) [m/s], the flow's weight [-] and the pad's predicted
-        velocity [m/s]. Samples going back in time start the track afresh (the clock jumped back)."""
+        velocity [m/s] and acceleration [m/s^2]. Samples going back in time start the track afresh (the clock jumped
+        back)."""
         if self.motion and t < self.motion[-1][0]:
             self.reset()
-        rate = (1.0 - weight) * np.asarray(pad_velocity_xy, dtype=float) - np.asarray(seen_xy, dtype=float)
+        rate = (1.0 - weight) * np.asarray(pad_velocity_xy, dtype=float) - np.asarray(seen_xy, dtype=float) + \
+            weight * self.flow_lag * np.asarray(pad_acceleration_xy, dtype=float)
         self.motion.append((t, rate))
         while len(self.motion) > 2 and self.motion[0][0] < t - self.HISTORY:
             self.motion.popleft()
