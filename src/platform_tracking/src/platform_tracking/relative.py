@@ -9,7 +9,8 @@ camera no longer sees the pad's centre, it drifted 0.15 m from the pad within a 
 touchdowns that ended 0.25 m from the centre). So, with ``seen`` the flow's velocity (world frame) and ``v_pad``
 the predicted pad velocity:
 
-    d/dt (pad - drone) = v_pad - v_drone = (1 - w) v_pad - seen + w T_f a_pad     (seen = v_drone - w v_pad + w T_f a_pad)
+    d/dt (pad - drone) = v_pad - v_drone = (1 - w) v_pad - seen + w T_f a_pad
+    (seen = v_drone - w v_pad + w T_f a_pad)
 
 The last term: the firmware's velocity estimate follows its IMU, which feels the drone's accelerations but not the
 vehicle's, and takes the flow in over ``T_f`` (``flow_lag``): while the vehicle speeds up at ``a_pad`` the estimate
