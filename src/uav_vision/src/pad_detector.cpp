@@ -776,26 +776,32 @@ bool PadDetector::evaluatePartial(const std::vector<cv::Point>& outline, const s
   return true;
 }
 
+int PadDetector::maskAt(const PlaneView& view, const Eigen::Vector2d& point, const cv::Mat& mask) const {
+  const cv::Size size = mask.size();
+  const double margin = params_.border_margin_px + 1.0;
+  const auto ideal = view.planeToPixel(point);
+  // Far outside the image the lens model means nothing (a polynomial): such points are not in view.
+  if (!ideal || std::abs(ideal->x - size.width / 2.0) > size.width || std::abs(ideal->y - size.height / 2.0) > size.height)
+    return -1;
+  const cv::Point2d pixel = frame_lens_ ? frame_lens_->distort(*ideal) : *ideal;
+  if (pixel.x < margin || pixel.y < margin || pixel.x > size.width - 1 - margin || pixel.y > size.height - 1 - margin)
+    return -1;
+  return mask.at<uint8_t>(cvRound(pixel.y), cvRound(pixel.x)) > 0 ? 1 : 0;
+}
+
 double PadDetector::redCoverage(const PlaneView& view, const Eigen::Vector2d& centre,
                                 const Eigen::Vector2d (&axes)[2]) const {
   // A grid over the square (short of its edges, which the image blurs), each point looked up in the mask.
   constexpr int kGrid = 15;
   const double reach = 0.45 * params_.pad.side;
-  const cv::Size size = pad_mask_.size();
-  const double margin = params_.border_margin_px + 1.0;
   int in_view = 0, red = 0;
   for (int i = 0; i < kGrid; ++i)
     for (int j = 0; j < kGrid; ++j) {
       const double u = reach * (2.0 * i / (kGrid - 1) - 1.0), v = reach * (2.0 * j / (kGrid - 1) - 1.0);
-      const auto ideal = view.planeToPixel(centre + u * axes[0] + v * axes[1]);
-      // Far outside the image the lens model means nothing (a polynomial): such points are not in view.
-      if (!ideal || std::abs(ideal->x - size.width / 2.0) > size.width || std::abs(ideal->y - size.height / 2.0) > size.height)
-        continue;
-      const cv::Point2d pixel = frame_lens_ ? frame_lens_->distort(*ideal) : *ideal;
-      if (pixel.x < margin || pixel.y < margin || pixel.x > size.width - 1 - margin || pixel.y > size.height - 1 - margin)
-        continue;
+      const int set = maskAt(view, centre + u * axes[0] + v * axes[1], pad_mask_);
+      if (set < 0) continue;
       ++in_view;
-      red += pad_mask_.at<uint8_t>(cvRound(pixel.y), cvRound(pixel.x)) > 0;
+      red += set;
     }
   return in_view > 0 ? double(red) / in_view : 0.0;
 }
@@ -806,29 +812,18 @@ std::pair<double, double> PadDetector::markerColours(const PlaneView& view, cons
   // around it (from 0.75 to 1.25 sides wide) in the red mask; only what is in view counts.
   constexpr int kGrid = 9;
   const double side = params_.pad.marker_side;
-  const cv::Size size = marker_mask_.size();
-  const double margin = params_.border_margin_px + 1.0;
-  auto lookUp = [&](const Eigen::Vector2d& point, const cv::Mat& mask) -> int {  // 1 set, 0 not, -1 not in view
-    const auto ideal = view.planeToPixel(point);
-    if (!ideal || std::abs(ideal->x - size.width / 2.0) > size.width || std::abs(ideal->y - size.height / 2.0) > size.height)
-      return -1;
-    const cv::Point2d pixel = frame_lens_ ? frame_lens_->distort(*ideal) : *ideal;
-    if (pixel.x < margin || pixel.y < margin || pixel.x > size.width - 1 - margin || pixel.y > size.height - 1 - margin)
-      return -1;
-    return mask.at<uint8_t>(cvRound(pixel.y), cvRound(pixel.x)) > 0 ? 1 : 0;
-  };
   int inside_seen = 0, white = 0, around_seen = 0, red = 0;
   for (int i = 0; i < kGrid; ++i)
     for (int j = 0; j < kGrid; ++j) {
       const double u = 2.0 * i / (kGrid - 1) - 1.0, v = 2.0 * j / (kGrid - 1) - 1.0;  // -1..1
-      const int inside = lookUp(centre + 0.4 * side * (u * axes[0] + v * axes[1]), marker_mask_);
+      const int inside = maskAt(view, centre + 0.4 * side * (u * axes[0] + v * axes[1]), marker_mask_);
       if (inside >= 0) {
         ++inside_seen;
         white += inside;
       }
       if (std::max(std::abs(u), std::abs(v)) < 0.99) continue;  // the band: the grid's outer ring, scaled
       for (const double scale : {0.75, 1.25}) {
-        const int outside = lookUp(centre + scale * side * (u * axes[0] + v * axes[1]), red_colour_);
+        const int outside = maskAt(view, centre + scale * side * (u * axes[0] + v * axes[1]), red_colour_);
         if (outside >= 0) {
           ++around_seen;
           red += outside;

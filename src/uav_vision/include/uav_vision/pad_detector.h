@@ -129,6 +129,9 @@ class PadDetector {
   // The share of a square of the pad's size (centre and axes on the plane) that is pad-coloured, of its part
   // in view [0..1].
   double redCoverage(const PlaneView& view, const Eigen::Vector2d& centre, const Eigen::Vector2d (&axes)[2]) const;
+  // `point` on the plane looked up in `mask` (image-sized): 1 set, 0 not, -1 not in view (off the image or within
+  // border_margin_px of its edge).
+  int maskAt(const PlaneView& view, const Eigen::Vector2d& point, const cv::Mat& mask) const;
   // Index in strip_outlines_ of the largest strip inside `outline`, or -1.
   int findStrip(const std::vector<cv::Point>& outline) const;
   // The centre marker (a white blob of computeMasks) inside one of the red `outlines`; false (with
