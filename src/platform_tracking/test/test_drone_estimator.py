@@ -561,6 +561,51 @@ def test_through_the_flows_blend_over_a_fast_vehicle_the_accelerometer_keeps_the
     assert measured[:, 0].max() < min(3.0, modelled[:, 0].max() / 3.0) and measured[:, 1].max() < 0.2
 
 
+def test_lifting_off_a_fast_car_the_flow_is_known_to_see_the_pad_whatever_gps_says():
+    """A drone rides its pad on a car at 15 m/s for 3 s (navdata: landed), then climbs at 1 m/s. Before the camera
+    sees the pad, the pad filter has it from the car's GPS, here 0.7 m behind the drone's own GPS-based estimate.
+    The flow sees the pad (w = 1) until the pad no longer fills the view. Anchored to the rest on the pad, the
+    estimate keeps the car's speed through the lift-off; going by the two GPS positions alone, the weight's model
+    says the flow sees the road and the estimate falls metres behind."""
+    from platform_tracking.flow_surface import FlowSurface
+    from platform_tracking.params import FlowSurfaceParams
+    import yaml
+    import os
+    config = os.path.join(os.path.dirname(__file__), "..", "config", "flow_surface_car.yaml")
+    surface_params = FlowSurfaceParams(**yaml.safe_load(open(config)))
+    speed, pad_z, lift_off = 15.0, 1.72, 3.0
+
+    def riding(t):
+        climb = max(0.0, t - lift_off)
+        return (speed * t, 0.0, pad_z + 0.065 + climb), (speed, 0.0, 1.0 if t >= lift_off else 0.0), 0.0
+
+    def run(anchored):
+        truth_surface = FlowSurface(surface_params)
+        est = DroneEstimator(EstimatorParams(), surface=FlowSurface(surface_params))
+        if not anchored:
+            est._anchored_position = lambda pad_position, t, vehicle_velocity: est._position_over(pad_position, t)
+        original_flow = est.flow
+        errors = []
+
+        def flow_over_pad(t, fx, fy, fz):
+            position, _, _ = riding(t)
+            pad_now = np.array([speed * t, 0.0, pad_z])
+            true_weight = truth_surface.weight(np.array(position), (1.0, 0.0, 0.0, 0.0), pad_now,
+                                               np.array([speed, 0.0]))
+            est.pad(t, pad_now - np.array([0.7, 0.0, 0.0]), (speed, 0.0, 0.0))
+            est.vehicle(t, (speed, 0.0), 0.0)
+            original_flow(t, fx - true_weight * speed, fy, fz, airborne=t >= lift_off)
+            if lift_off <= t <= lift_off + 3.0:
+                estimate = est.estimate(t)
+                errors.append((abs(estimate.velocity[0] - speed), abs(estimate.position[0] - position[0])))
+        est.flow = flow_over_pad
+        fly(riding, lift_off + 3.0, seed=4, estimator=est, ground=pad_z, accelerometer=True, gps_velocity=True)
+        return np.array(errors)
+    anchored, unanchored = run(True), run(False)
+    assert unanchored[:, 1].max() > 2.0
+    assert anchored[:, 0].max() < 1.0 and anchored[:, 1].max() < 0.6
+
+
 def test_state_history_interpolates_inside_extrapolates_a_little_outside_and_restarts_when_time_goes_back():
     from platform_tracking.estimator import StateHistory
     history = StateHistory(span=1.0, keep=2)

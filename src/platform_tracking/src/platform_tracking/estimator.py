@@ -48,6 +48,8 @@ PAD_MAX_AGE = 1.0   # a pad state older than this is not used to correct the flo
 SONAR_MAX_AGE = 0.2  # a sonar height older than this does not give the height above the pad [s]
 SONAR_PAD_GATE = 0.25  # ...nor one further than this from the estimated height above the pad (the Summit XL's pad is
                        # 0.5 m above the ground: an echo from the ground must not pass) [m]
+RIDING_MIN_SPEED = 1.0  # resting, the drone rides the vehicle when the vehicle is at least this fast... [m/s]
+RIDING_MAX_MISMATCH = 0.5  # ...and its GPS velocity within this of the vehicle's: then it sits on the pad [m/s]
 
 
 def heading_to_world(vx, vy, yaw):
@@ -356,6 +358,7 @@ class DroneEstimator:
         #                                  vehicle as the accelerometer measures it, else the model's [-]
         self.modelled_weight = 0.0       # the model's, blended in as the firmware blends each flow reading [-]
         self.flow_weight_spread = 0.0    # how much the weight changes within weight_position_std of the estimate [-]
+        self.rest_offset = None          # the estimate minus the pad filter's position while it rode the pad (xy) [m]
         self.inertial = InertialVelocity(params.inertial_gain, params.inertial_reference_std) \
             if params.inertial_gain > 0.0 else None
         self.history = StateHistory(HISTORY_SPAN)  # (time, position, velocity) after each prediction
@@ -559,8 +562,10 @@ class DroneEstimator:
             vehicle_velocity = self._vehicle_velocity(t)
             if abs(t - pad_t) <= PAD_MAX_AGE and vehicle_velocity is not None:
                 pad_now = pad_position + pad_velocity * (t - pad_t)
-                position, orientation = self._position_over(pad_now, t), self._orientation_at(t)
+                position, orientation = self._anchored_position(pad_now, t, vehicle_velocity), self._orientation_at(t)
                 weight = self.surface.weight(position, orientation, pad_now, vehicle_velocity)
+                if weight <= 0.0 and self.airborne:
+                    self.rest_offset = None  # the view has left the vehicle: the anchor is spent
                 target = weight * vehicle_velocity
                 if self.inertial is not None:
                     # The height above the pad comes from the sonar (centimetres), the rest from GPS and vision.
@@ -592,6 +597,25 @@ class DroneEstimator:
             if stamp <= t + 1e-9:
                 return turned_about_world_z(orientation, turn)
         return turned_about_world_z(self.orientation, turn)
+
+    def _anchored_position(self, pad_position, t, vehicle_velocity):
+        """The drone's position for the view of the vehicle (``_position_over``), anchored to the pad from a rest
+        on it: riding the pad, the drone is over its centre, whatever the estimate and the pad filter say. Before
+        the camera sees the whole pad those two are GPS positions with their own metre-level drifts; in harsh
+        they put a drone lifting off a car at 15 m/s 0.6 m beside the pad, the weight's model said the flow saw the
+        road while it saw the pad, and the estimate fell 7 m behind within 0.6 s. The anchor keeps the offset
+        they had at rest until the view leaves the vehicle (above about 1.5 m over the car's pad, before the pad
+        filter takes the camera's fixes, which are placed with this estimate)."""
+        position = self._position_over(pad_position, t)
+        if not self.airborne:
+            resting = self._resting_velocity(t)
+            speed = float(np.hypot(*vehicle_velocity))
+            riding = resting is not None and speed >= RIDING_MIN_SPEED and \
+                float(np.hypot(*(resting[:2] - vehicle_velocity))) <= RIDING_MAX_MISMATCH
+            self.rest_offset = position[:2] - pad_position[:2] if riding else None
+        if self.rest_offset is not None:
+            position[:2] -= self.rest_offset
+        return position
 
     def _position_over(self, pad_position, t):
         """The drone's position for the view of the vehicle: the estimate, its height above the pad taken from
