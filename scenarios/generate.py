@@ -42,14 +42,14 @@ CRASHES = (
 
 def scenario(name, seed, vehicle="summit_xl", path="straight", speed=1.0, radius=10.0, time_limit=120.0,
              conditions=None, sensors=None, events=None, start="on_pad", expect=None, description="", realism=None,
-             comment=None):
+             comment=None, landing_at=0):
     out = {"name": name, "description": description, "seed": seed, "time_limit_s": time_limit,
            "platform": {"vehicle": vehicle, "path": path, "speed_mps": speed, "radius_m": radius},
            "drone": {"start": start},
            "conditions": dict({"wind_speed": 0.0, "wind_direction_deg": 0.0, "gust_mps": 0.0, "drone_battery": 90,
                                "control_battery": 80, "temp": 15}, **(conditions or {})),
            "sensors": dict({"camera_noise": 0.0, "camera_fps": 30}, **(sensors or {})),
-           "events": [{"at_s": 0, "operator": "landing"}] + list(events or []),
+           "events": [{"at_s": landing_at, "operator": "landing"}] + list(events or []),
            "expect": expect or dict(ON_PAD)}
     if realism is not None:
         out["realism"] = realism
@@ -261,6 +261,14 @@ def stress_sets():
                                     speed=speed, time_limit=150.0,
                                     description="car on a straight road at %g m/s" % speed))
     sets["realism_compare"] = compare
+    # The car at 15 m/s, 12 seeds (run in realistic and harsh): half the take-offs from the car standing, half
+    # from the car at speed (the landing ordered 6 s in): the drone's estimate must keep the car's speed through it.
+    sets["car_15ms"] = [
+        scenario("car_15ms_%s_seed%d" % ("at_speed" if at_speed else "from_start", seed), seed=seed, vehicle="car",
+                 speed=15.0, time_limit=150.0, landing_at=6.0 if at_speed else 0,
+                 description="car on a straight road at 15 m/s, the landing ordered %s" % (
+                     "6 s in, the car at speed" if at_speed else "at the start"))
+        for at_speed in (False, True) for seed in range(5001, 5007)]
     return sets
 
 
