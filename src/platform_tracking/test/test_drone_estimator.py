@@ -565,8 +565,9 @@ def test_lifting_off_a_fast_car_the_flow_is_known_to_see_the_pad_whatever_gps_sa
     """A drone rides its pad on a car at 15 m/s for 3 s (navdata: landed), then climbs at 1 m/s. Before the camera
     sees the pad, the pad filter has it from the car's GPS, here 0.7 m behind the drone's own GPS-based estimate.
     The flow sees the pad (w = 1) until the pad no longer fills the view. Anchored to the rest on the pad, the
-    estimate keeps the car's speed through the lift-off; going by the two GPS positions alone, the weight's model
-    says the flow sees the road and the estimate falls metres behind."""
+    estimate keeps the car's speed through the lift-off, also when the GPS drops out from 1.5 s before it to 2 s after
+    (the anchor holds without a GPS velocity); going by the two GPS positions alone, the weight's model says the flow
+    sees the road and the estimate falls metres behind."""
     from platform_tracking.flow_surface import FlowSurface
     from platform_tracking.params import FlowSurfaceParams
     import yaml
@@ -579,7 +580,7 @@ def test_lifting_off_a_fast_car_the_flow_is_known_to_see_the_pad_whatever_gps_sa
         climb = max(0.0, t - lift_off)
         return (speed * t, 0.0, pad_z + 0.065 + climb), (speed, 0.0, 1.0 if t >= lift_off else 0.0), 0.0
 
-    def run(anchored):
+    def run(anchored, gps_outage=None):
         truth_surface = FlowSurface(surface_params)
         est = DroneEstimator(EstimatorParams(), surface=FlowSurface(surface_params))
         if not anchored:
@@ -599,11 +600,14 @@ def test_lifting_off_a_fast_car_the_flow_is_known_to_see_the_pad_whatever_gps_sa
                 estimate = est.estimate(t)
                 errors.append((abs(estimate.velocity[0] - speed), abs(estimate.position[0] - position[0])))
         est.flow = flow_over_pad
-        fly(riding, lift_off + 3.0, seed=4, estimator=est, ground=pad_z, accelerometer=True, gps_velocity=True)
+        fly(riding, lift_off + 3.0, seed=4, estimator=est, ground=pad_z, accelerometer=True, gps_velocity=True,
+            gps_outage=gps_outage)
         return np.array(errors)
-    anchored, unanchored = run(True), run(False)
+    unanchored = run(False)
     assert unanchored[:, 1].max() > 2.0
-    assert anchored[:, 0].max() < 1.0 and anchored[:, 1].max() < 0.6
+    for gps_outage in (None, (lift_off - 1.5, lift_off + 2.0)):
+        anchored = run(True, gps_outage)
+        assert anchored[:, 0].max() < 1.0 and anchored[:, 1].max() < (0.6 if gps_outage is None else 1.0), gps_outage
 
 
 def test_state_history_interpolates_inside_extrapolates_a_little_outside_and_restarts_when_time_goes_back():

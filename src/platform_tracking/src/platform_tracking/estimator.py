@@ -607,11 +607,10 @@ class DroneEstimator:
         they had at rest until the view leaves the vehicle (above about 1.5 m over the car's pad, before the pad
         filter takes the camera's fixes, which are placed with this estimate)."""
         position = self._position_over(pad_position, t)
-        if not self.airborne:
-            resting = self._resting_velocity(t)
+        resting = None if self.airborne else self._resting_velocity(t)
+        if resting is not None:  # without a recent GPS velocity (a dropout) the anchor a rest began with holds
             speed = float(np.hypot(*vehicle_velocity))
-            riding = resting is not None and speed >= RIDING_MIN_SPEED and \
-                float(np.hypot(*(resting[:2] - vehicle_velocity))) <= RIDING_MAX_MISMATCH
+            riding = speed >= RIDING_MIN_SPEED and float(np.hypot(*(resting[:2] - vehicle_velocity))) <= RIDING_MAX_MISMATCH
             self.rest_offset = position[:2] - pad_position[:2] if riding else None
         if self.rest_offset is not None:
             position[:2] -= self.rest_offset
