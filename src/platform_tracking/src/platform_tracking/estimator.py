@@ -48,8 +48,8 @@ PAD_MAX_AGE = 1.0   # a pad state older than this is not used to correct the flo
 SONAR_MAX_AGE = 0.2  # a sonar height older than this does not give the height above the pad [s]
 SONAR_PAD_GATE = 0.25  # ...nor one further than this from the estimated height above the pad (the Summit XL's pad is
                        # 0.5 m above the ground: an echo from the ground must not pass) [m]
-RIDING_MIN_SPEED = 1.0  # resting, the drone rides the vehicle when the vehicle is at least this fast... [m/s]
-RIDING_MAX_MISMATCH = 0.5  # ...and its GPS velocity within this of the vehicle's: then it sits on the pad [m/s]
+RIDING_MIN_SPEED = 2.0  # resting, the drone rides the vehicle when the vehicle is at least this fast... [m/s]
+RIDING_MAX_MISMATCH = 1.0  # ...and its GPS velocity within this of the vehicle's: then it sits on the pad [m/s]
 
 
 def heading_to_world(vx, vy, yaw):
@@ -392,11 +392,19 @@ class DroneEstimator:
             and self._resting_velocity(t) is None
 
     def _resting_velocity(self, t):
-        """Resting (the navdata says landed), the GPS velocity while it is fresh, else None. On its pad the drone
-        rides the vehicle while its flow, seeing the pad, reads a few cm/s whatever the vehicle does."""
-        if self.airborne or self.gps_velocity is None or t - self.gps_velocity_time > self.p.resting_gps_timeout:
+        """Resting (the navdata says landed): riding the pad (``rest_offset``), the vehicle's reported velocity; else
+        the GPS velocity while it is fresh; else None. On its pad the drone rides the vehicle while its flow, seeing
+        the pad, reads a few cm/s whatever the vehicle does. In a GPS dropout on a car speeding up to 15 m/s the last
+        GPS velocity, held, was 1.8 m/s short: the estimate fell off the pad, and so did the weight's model (see
+        _anchored_position)."""
+        if self.airborne:
             return None
-        return np.array(self.gps_velocity, dtype=float)
+        vehicle_velocity = self._vehicle_velocity(t) if self.rest_offset is not None else None
+        if vehicle_velocity is not None:
+            return np.array([vehicle_velocity[0], vehicle_velocity[1], 0.0])
+        if self.gps_velocity is not None and t - self.gps_velocity_time <= self.p.resting_gps_timeout:
+            return np.array(self.gps_velocity, dtype=float)
+        return None
 
     def _velocity(self, t):
         """World velocity (x, y, z) the motion model integrates at ``t``: resting, the GPS velocity; flying, the
@@ -509,6 +517,8 @@ class DroneEstimator:
         part of the vehicle's velocity the flow did not see is kept beside it (``unseen_velocity``).
         ``airborne``: the navdata's state says the drone flies (not landed on its pad)."""
         self._advance(t)
+        if self.airborne and not airborne:
+            self.rest_offset = None  # a new rest: whether it is on the pad is judged afresh
         self.airborne = airborne
         modelled = self._unseen_velocity(t)
         self.modelled_unseen = (t, modelled)
@@ -607,11 +617,15 @@ class DroneEstimator:
         they had at rest until the view leaves the vehicle (above about 1.5 m over the car's pad, before the pad
         filter takes the camera's fixes, which are placed with this estimate)."""
         position = self._position_over(pad_position, t)
-        resting = None if self.airborne else self._resting_velocity(t)
-        if resting is not None:  # without a recent GPS velocity (a dropout) the anchor a rest began with holds
-            speed = float(np.hypot(*vehicle_velocity))
-            riding = speed >= RIDING_MIN_SPEED and float(np.hypot(*(resting[:2] - vehicle_velocity))) <= RIDING_MAX_MISMATCH
-            self.rest_offset = position[:2] - pad_position[:2] if riding else None
+        if not self.airborne:
+            # Riding is latched for the rest: a drone at rest cannot leave its pad, and its GPS velocity lags the
+            # vehicle's by 0.2-0.4 s (1 m/s on a car speeding up).
+            resting = self._resting_velocity(t)
+            riding = self.rest_offset is not None or (
+                resting is not None and float(np.hypot(*vehicle_velocity)) >= RIDING_MIN_SPEED and
+                float(np.hypot(*(resting[:2] - vehicle_velocity))) <= RIDING_MAX_MISMATCH)
+            if riding:
+                self.rest_offset = position[:2] - pad_position[:2]
         if self.rest_offset is not None:
             position[:2] -= self.rest_offset
         return position
