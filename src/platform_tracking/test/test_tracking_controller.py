@@ -101,6 +101,21 @@ def test_the_along_track_gain_falls_as_the_camera_latency_grows():
     assert along(0.4, 1.0) == pytest.approx(1.0)    # never below the gain across the travel
 
 
+def test_high_over_a_fast_car_the_along_track_gain_is_the_one_across():
+    params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, flow_time_lead=0.0,
+                            acceleration_window=0.0, position_gain=1.0, along_track_gain=2.5,
+                            along_track_gain_max_pad_speed=8.0)
+    controller = TrackingController(params)
+
+    def along(t, speed, weight=0.0):
+        pad = still_pad(0.0, 0.2, vy=speed, stamp=t)
+        command = controller.world_velocity(t, drone(vy=speed), pad, flow_weight=weight)[1]
+        return (command - (1.0 - weight) * speed) / 0.2  # over the pad the feed-forward is (1 - w) of its speed
+    assert along(0.0, 3.0) == pytest.approx(2.5)       # a Summit XL's pace
+    assert along(0.1, 15.0) == pytest.approx(1.0)      # a car's, seen from 4 m (the flow on the road)
+    assert along(0.2, 15.0, 1.0) == pytest.approx(2.5)  # low over its pad, the flow on the pad
+
+
 def test_a_pad_that_never_moved_has_no_travel_axis_and_one_gain():
     params = TrackingParams(lookahead=0.0, integral_gain=0.0, velocity_lead=0.0, position_gain=1.0,
                             along_track_gain=2.5)

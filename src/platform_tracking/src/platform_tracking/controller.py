@@ -18,8 +18,10 @@ The velocity command is built in ``world`` and rotated into the *heading frame* 
   round with the travel frame at a back-and-forth's reversal it pushed the drone off the pad.
 
 - ``K``: ``along_track_gain`` on the error along the pad's travel (its changes of speed, which the prediction
-  learns late), at most ``along_track_gain_latency`` over the measured camera latency; ``position_gain`` across
-  it (turns, where a high gain overshoots) and before the pad ever moved.
+  learns late), at most ``along_track_gain_latency`` over the measured camera latency, and over a pad as fast as
+  ``along_track_gain_max_pad_speed`` only as far as the flow sees the pad (a fast car's drag leaves the drone too
+  little acceleration for it in absolute flight); ``position_gain`` across it (turns, where a high gain overshoots)
+  and before the pad ever moved.
 - ``pad(t)`` comes from the *predicted* path (kalman_prediction_path); the prediction is ``age``
   seconds old when it arrives, so it is read at the current time, not at its stamp: that is the
   pipeline latency compensation.
@@ -290,7 +292,8 @@ class TrackingController:
         # Along the pad's travel the error comes from its changes of speed, which the prediction learns late
         # (a pull-away, a braking); across it from turns, where a higher gain overshoots the corner. How high the
         # gain may go depends on the delay in the loop, mostly the camera's.
-        along_gain = self.along_track_gain(camera_latency) if self.travel_known else p.position_gain
+        along_gain = self.along_track_gain(camera_latency, float(np.hypot(*pad_velocity)), w) if self.travel_known \
+            else p.position_gain
         proportional = to_world @ (np.array([along_gain, p.position_gain]) * (to_world.T @ error))
         correction = clamp_norm(proportional + (1.0 - w) * p.integral_gain * (to_world @ self.integral),
                                 p.max_correction_speed)
@@ -299,13 +302,17 @@ class TrackingController:
             feed = feed - w * pad_velocity
         return clamp_norm(feed + correction, p.max_horizontal_speed)
 
-    def along_track_gain(self, camera_latency):
+    def along_track_gain(self, camera_latency, pad_speed=0.0, flow_weight=0.0):
         """The gain along the pad's travel: a loop with a delay bears a gain up to about the inverse of that delay
-        (``camera_latency``, 0 when not known yet)."""
+        (``camera_latency``, 0 when not known yet). Flying over the ground (``flow_weight`` 0) above a pad as fast as
+        ``along_track_gain_max_pad_speed`` the drone's velocity loop, its tilt half spent on the drag, saturates at
+        more than ``position_gain``; low over the pad, where its flow follows the pad (weight 1), it keeps up."""
         p = self.p
-        if camera_latency <= 0.0:
-            return p.along_track_gain
-        return max(p.position_gain, min(p.along_track_gain, p.along_track_gain_latency / camera_latency))
+        gain = p.along_track_gain if camera_latency <= 0.0 else \
+            max(p.position_gain, min(p.along_track_gain, p.along_track_gain_latency / camera_latency))
+        if pad_speed >= p.along_track_gain_max_pad_speed:
+            gain = flow_weight * gain + (1.0 - flow_weight) * p.position_gain
+        return gain
 
     @staticmethod
     def to_heading_frame(world_xy, yaw):

@@ -407,7 +407,7 @@ class DroneEstimator:
         return None
 
     def _velocity(self, t):
-        """World velocity (x, y, z) the motion model integrates at ``t``: resting, the GPS velocity; flying, the
+        """World velocity (x, y, z) the motion model integrates at ``t``: resting, ``_resting_velocity``; flying, the
         flow while it is fresh, else the last GPS velocity while that is fresh, else none (the position then holds
         while its variance grows)."""
         resting = self._resting_velocity(t)

@@ -136,6 +136,7 @@ class TrackingParams:
     position_gain: float = spec(1.2, 0.0, 20.0, "1/s")
     along_track_gain: float = spec(2.4, 0.0, 20.0, "1/s")
     along_track_gain_latency: float = spec(0.26, 0.0, 10.0, "-")
+    along_track_gain_max_pad_speed: float = spec(8.0, 0.0, 100.0, "m/s")
     integral_gain: float = spec(0.5, 0.0, 20.0, "1/s^2")
     integral_speed_limit: float = spec(2.0, 0.0, 20.0, "m/s")
     integral_error_limit: float = spec(2.0, 0.0, 100.0, "m")
