@@ -34,7 +34,7 @@ def test_stress_sets_are_the_readme_figures_and_stay_out_of_the_suite():
     sets = {name: [scenario.load(f) for f in benchmark.collect([os.path.join(stress, name)])]
             for name in sorted(os.listdir(stress))}
     assert {name: len(items) for name, items in sets.items()} == {"short_sweep": 8, "square_stop_and_go_3ms": 24,
-                                                                  "wind_5ms": 30, "realism_compare": 20}
+                                                                  "wind_5ms": 30, "realism_compare": 20, "car_15ms": 12}
     compare = sets["realism_compare"]
     assert {s["platform"]["path"] for s in compare} == set(scenario.PATHS)
     assert {s["platform"]["speed_mps"] for s in compare if s["platform"]["vehicle"] == "car"} == {5.0, 10.0, 15.0}
@@ -46,5 +46,9 @@ def test_stress_sets_are_the_readme_figures_and_stay_out_of_the_suite():
     assert {s["conditions"]["wind_speed"] for s in wind} == {5.0}
     assert {s["platform"]["path"] for s in wind} == set(scenario.PATHS) - {"straight"}
     assert {s["platform"]["speed_mps"] for s in wind} == {2.0, 3.0}
+    car = sets["car_15ms"]
+    assert {(s["platform"]["vehicle"], s["platform"]["path"], s["platform"]["speed_mps"]) for s in car} == \
+        {("car", "straight", 15.0)}
+    assert sorted(e["at_s"] for s in car for e in s["events"] if e.get("operator") == "landing") == [0] * 6 + [6.0] * 6
     # make bench reads scenarios/ itself: none of these is in the suite
     assert not [f for f in benchmark.collect([SUITE]) if os.sep + "stress" + os.sep in f]
