@@ -386,7 +386,9 @@ class TrackingNode:
             if drone is not None:
                 pad = self._pad_prediction()
                 pad_velocity = np.zeros(2) if pad is None else pad.velocity[:2]
-                pad_acceleration = np.zeros(2) if pad is None else pad.acceleration_at(self.unseen[0])[:2]
+                # Only the flow's share of the vehicle's acceleration counts: none (and no path look-up) at weight 0.
+                pad_acceleration = np.zeros(2) if pad is None or self.unseen[2] <= 0.0 else \
+                    pad.acceleration_at(self.unseen[0])[:2]
                 self.relative.add_motion(self.unseen[0], drone[1] - self.unseen[1], self.unseen[2], pad_velocity,
                                          pad_acceleration)
 
