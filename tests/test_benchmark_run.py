@@ -1,7 +1,9 @@
 """One short benchmark run, for real: `rosrun landing_eval benchmark` on a small directory with a thesis
-scenario (battery 10 % in flight: emergency landing with coordinates) and a file with a typo. Each
-scenario gets its own master and simulator; the bad file must come out as an error row, never a success."""
+scenario (battery 10 % in flight: emergency landing with coordinates), in the ideal and the realistic world, and a
+file with a typo. Each run gets its own master and simulator; the bad file must come out as an error row, never a
+success; no node may raise in a callback (rospy logs it and goes on: the ideal world's tracker once did, unseen)."""
 import csv
+import json
 import os
 import subprocess
 
@@ -23,25 +25,31 @@ def test_short_benchmark_run_scores_the_good_scenario_and_marks_the_bad_one(tmp_
     (suite / "typo.yaml").write_text("name: typo\nplatfrom: {vehicle: summit_xl}\n")
 
     out = tmp_path / "out"
-    run = subprocess.run(["rosrun", "landing_eval", "benchmark", str(suite), "--out", str(out), "--jobs", "2"],
+    run = subprocess.run(["rosrun", "landing_eval", "benchmark", str(suite), "--out", str(out), "--jobs", "2",
+                          "--realism", "ideal,realistic"],
                          capture_output=True, text=True, timeout=WALL_TIMEOUT_S, stdin=subprocess.DEVNULL)
     assert run.returncode == 1, "one scenario is bad, so the benchmark must fail:\n" + run.stdout + run.stderr
 
     with open(out / "results.csv") as stream:
         rows = {row["name"]: row for row in csv.DictReader(stream)}
-    assert set(rows) == {"short_battery_10", "typo"}, rows
-    good_row, bad_row = rows["short_battery_10"], rows["typo"]
-    assert good_row["outcome"] == "emergency_landed", good_row
-    assert good_row["passed"] == "True", good_row
-    assert float(good_row["real_time_factor"]) > 0
-    assert bad_row["outcome"] == "error" and bad_row["passed"] == "False"
-    assert "typo.yaml" in bad_row["error"] and "platfrom" in bad_row["error"], bad_row["error"]
+    assert set(rows) == {name + "@" + profile for name in ("short_battery_10", "typo")
+                         for profile in ("ideal", "realistic")}, rows
+    for profile in ("ideal", "realistic"):
+        bad_row = rows["typo@" + profile]
+        assert bad_row["outcome"] == "error" and bad_row["passed"] == "False"
+        assert "typo.yaml" in bad_row["error"] and "platfrom" in bad_row["error"], bad_row["error"]
+        good_row = rows["short_battery_10@" + profile]
+        assert good_row["outcome"] == "emergency_landed", good_row
+        assert good_row["passed"] == "True", good_row
+        assert float(good_row["real_time_factor"]) > 0
+        result = json.loads((out / ("short_battery_10@" + profile) / "result.json").read_text())
+        assert result["callback_errors"] == {}, result["callback_errors"]
 
     summary = (out / "summary.md").read_text()
-    assert "| **all** | 1/2 |" in summary, summary
-    assert "- `typo`: error" in summary
-    assert (out / "short_battery_10" / "result.json").is_file()
-    bags = [out / "short_battery_10" / name for name in os.listdir(out / "short_battery_10") if name.endswith(".bag")]
+    assert "| **all** | 2/4 |" in summary, summary
+    assert "- `typo@ideal`: error" in summary
+    run_dir = out / "short_battery_10@realistic"
+    bags = [run_dir / name for name in os.listdir(run_dir) if name.endswith(".bag")]
     assert len(bags) == 1
     # The bag holds the flight from its first sim-second (its connections once came up seconds late).
     first = first_recorded(bags[0], {"/groundtruth/ardrone", "/ardrone/navdata", "/ardrone/odom_estimate", "/tf"})

@@ -23,6 +23,16 @@ def test_expectations():
     assert "although a no-go" in why
 
 
+def test_a_landing_with_an_exception_in_a_nodes_callback_does_not_pass():
+    landed = {"outcome": "landed_on_pad", "touchdown_error_m": 0.05, "decisions": [], "callback_errors": {
+        "/platform_tracking": {"count": 618, "first": "bad callback: <bound method ...>\nTraceback (most recent call "
+                                                      "last):\n  ...\nIndexError: list index out of range\n"}}}
+    passed, why = benchmark.check_expectations({}, landed)
+    assert not passed
+    assert why == "exception(s) in callbacks: /platform_tracking 618 times (IndexError: list index out of range)"
+    assert benchmark.check_expectations({}, dict(landed, callback_errors={})) == (True, "")
+
+
 def test_summary_groups_and_lists_every_miss():
     rows = [
         {"name": "a", "vehicle": "summit_xl", "path": "circle", "speed_mps": 1.0, "outcome": "landed_on_pad",

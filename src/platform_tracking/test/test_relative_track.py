@@ -70,3 +70,15 @@ def test_without_a_fix_for_max_age_there_is_no_relative_track_and_time_going_bac
     assert track.at(1.1) is None
     track.add_motion(-5.0, (0.0, 0.0), 1.0, (0.0, 0.0))  # a new simulation
     assert track.at(-5.0) is None
+
+
+def test_fixes_without_any_flow_sample_each_replace_the_last_and_give_no_track():
+    # The ideal world has no flow on the link: the tracker's callback raised on every fix after the first.
+    track = RelativeTrack(fix_gain=0.5, max_age=1.0)
+    track.add_fix(0.0, (0.1, 0.0))
+    track.add_fix(0.1, (0.3, 0.0))
+    assert track.anchor[1] == pytest.approx((0.3, 0.0))
+    assert track.at(0.1) is None
+    track.add_motion(0.1, (0.0, 0.0), 1.0, (0.0, 0.0))
+    position, _ = track.at(0.1)
+    assert position == pytest.approx((0.3, 0.0))

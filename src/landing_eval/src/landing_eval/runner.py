@@ -38,6 +38,7 @@ MODE_WAIT_S = 30.0              # sim seconds a next mission waits for the super
 # refused a take-off on the battery just swapped out (36.5 % < 40 %) when the command came first.
 CONDITIONS_SETTLE_S = 1.0
 RECORDER = "flight_recorder"
+CALLBACK_EXCEPTION = "bad callback"  # how rospy logs an exception it caught in a subscriber's callback
 INTERRUPTED = "interrupted"  # how the error of a run stopped from outside (Ctrl-C, SIGTERM) begins
 # A run whose time limit is over LONG_RUN_S records a bag per RECORDER_SPLIT_S of sim time: rosbag record holds
 # its whole bag's index in memory (about 1 MB a minute of flight) and frees it only when it starts the next bag [s].
@@ -180,6 +181,10 @@ class FlightMonitor:
         self.missions = missions_mod.MissionLog()
         self.resources = processes.ResourceLog()
         self.warnings = []  # (wall s, node, text) of WARN and worse on /rosout_agg, when the scenario fuzzes
+        # {node: {"count", "first"}} of the exceptions rospy caught in a node's callbacks ("bad callback"): the node
+        # lives on, but whatever the callback did after the exception was lost (an ideal-world tracker once raised on
+        # every camera fix, 27 times a second, unnoticed).
+        self.callback_errors = {}
         self.master_lost_at = None
         self.recorder_deaths = []
         self._recorder_restart = None  # (new recorder, sim time) until it has subscribed again
@@ -197,9 +202,8 @@ class FlightMonitor:
         sub("emergency/position", PositionXYCommand, only_from(
             "/emergency", lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)])))
         sub("supervisor/decisions", String, only_from("/supervisor", self._on_decision))
-        if s.get("fuzz"):
-            from rosgraph_msgs.msg import Log
-            rospy.Subscriber("rosout_agg", Log, self._on_log, queue_size=1000)
+        from rosgraph_msgs.msg import Log
+        rospy.Subscriber("rosout_agg", Log, self._on_log, queue_size=1000)
         self.operator = rospy.Publisher("operator/command", String, queue_size=10, latch=True)
         self.tracker_command = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
         self.fault = rospy.Publisher("mujoco_sim/fault", String, queue_size=10)
@@ -229,8 +233,11 @@ class FlightMonitor:
             self.missions.emergency()
 
     def _on_log(self, msg):
-        if msg.level >= msg.WARN:  # (sim time: the nodes throttle their warnings on their clock)
+        if msg.level >= msg.WARN and self.s.get("fuzz"):  # (sim time: the nodes throttle their warnings on their clock)
             self.warnings.append((round(msg.header.stamp.to_sec(), 3), msg.name, msg.msg))
+        if msg.level >= msg.ERROR and msg.msg.startswith(CALLBACK_EXCEPTION):
+            seen = self.callback_errors.setdefault(msg.name, {"count": 0, "first": msg.msg[-600:]})
+            seen["count"] += 1
 
     def _needed_topics(self):
         """Topics the analysis of the bag cannot do without."""
@@ -547,6 +554,7 @@ class FlightMonitor:
         result["faults"] = self.faults.results()
         result["master_lost_at_s"] = self.master_lost_at
         result["recorder_deaths"] = self.recorder_deaths
+        result["callback_errors"] = self.callback_errors
         return result
 
     def start_leaving_graph(self, timeout=10.0):

@@ -56,7 +56,9 @@ class RelativeTrack:
     def add_fix(self, t, relative_xy):
         """The camera's fix at its capture time ``t``: pad minus drone (world x, y) [m]."""
         relative = np.asarray(relative_xy, dtype=float)
-        if self.anchor is None or t < self.anchor[0] or t - self.anchor[0] > self.max_age:
+        # Without a flow sample (no flow on the link yet, or none at all in the ideal world) there is nothing to
+        # carry the previous fix on with: the new one replaces it.
+        if self.anchor is None or not self.motion or t < self.anchor[0] or t - self.anchor[0] > self.max_age:
             self.anchor = (t, relative)
             return
         carried = self._carried(t)
