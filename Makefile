@@ -56,6 +56,9 @@ build: deps
 	catkin_make -C $(WS) -j$(JOBS) -DPYTHON_EXECUTABLE=$(VENV)/bin/python -DCMAKE_BUILD_TYPE=Release \
 	  -DCATKIN_ENABLE_TESTING=ON -DSETUPTOOLS_DEB_LAYOUT=OFF > $(WS)/.stamps/build.log 2>&1 \
 	  || { tail -n 60 $(WS)/.stamps/build.log; echo "catkin_make failed: full log in .stamps/build.log"; exit 1; }
+	@# Byte-compiled once here: where PYTHONDONTWRITEBYTECODE is set (as on our machines) every node compiled the
+	@# workspace's modules again at each start, 0.1 CPU s of its 0.4 (compileall writes the caches regardless).
+	$(VENV)/bin/python -m compileall -q -j0 $(WS)/src/*/src $(WS)/devel/lib/python3*/site-packages > /dev/null
 	@echo "== built: source env.sh to use the workspace"
 
 test: build
