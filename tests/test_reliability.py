@@ -136,6 +136,7 @@ def test_garbage_on_every_input_kills_no_node_is_rejected_by_every_consumer_and_
     run, result = run_scenario(os.path.join(RELIABILITY, "fuzz_short.yaml"), out)
     assert run.returncode == 0, run.stderr[-3000:]
     assert result["node_deaths"] == [] and not result["error"]
+    assert result["callback_errors"] == {}, result["callback_errors"]  # rejected, never raised on
     assert all(m["outcome"] in SAFE for m in result["missions"]), result["missions"]
     fuzz = result["fuzz"]
     assert fuzz["sim_time_fuzzed_s"] > 30.0 and len(fuzz["bursts"]) >= 5
@@ -168,6 +169,7 @@ def test_nodes_killed_mid_flight_come_back_and_the_drone_lands_on_the_pad(tmp_pa
     assert all(f["recovered_after_s"] is not None and f["error"] is None for f in faults.values()), faults
     assert any(d["action"] == "recovered" and d["value"]["mode"] == "landing" for d in result["decisions"])
     assert {d["node"] for d in result["node_deaths"]} == {"supervisor", "cmd_vel_mux", "platform_tracking"}
+    assert result["callback_errors"] == {}, result["callback_errors"]  # the others took the restarts in their stride
     # The killed recorder's bag was reindexed and a new one records the rest: both read, together the whole flight.
     assert [os.path.basename(b) for b in result["bags"]] == ["flight.bag", "flight.2.bag"]
     first, second = read_bag(result["bags"][0], ["/ardrone/navdata"]), read_bag(result["bags"][1], ["/ardrone/navdata"])
