@@ -188,6 +188,25 @@ def test_tracking_holds_the_nominal_height():
     assert f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30)).command.vz == 0.0
 
 
+def test_tracking_climbs_for_a_wider_view_while_the_pad_stays_unseen_and_comes_back_once_it_is_seen():
+    """The prediction rests on GPS: 4-6 m off in harsh, the pad outside a 4 m view for good."""
+    f = tracking_flight()
+    assert f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30), vision_age=P.search_climb_after - 0.1).command.vz == 0.0
+    out = f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30), vision_age=P.search_climb_after + 0.1)
+    assert out.command.vz > 0.5 and f.state == State.TRACKING
+    assert f.lines[-1] == "TRACKING: pad not seen for %.1f s: climbing to %.1f m for a wider view" % (
+        P.search_climb_after + 0.1, P.relocate_height)
+    logged = len(f.lines)
+    f.run(1.0, make=fresh(height=5.0), vision_age=P.search_climb_after + 1.0)
+    assert f.out.command.vz > 0.5 and len(f.lines) == logged  # logged once
+    assert f.step(drone=drone(height=P.relocate_height), pad=pad(f.t + 1 / 30),
+                  vision_age=P.search_climb_after + 2.0).command.vz == 0.0  # holds the wider view
+    assert f.step(drone=drone(height=P.relocate_height), pad=pad(f.t + 1 / 30)).command.vz < -0.5  # seen: back down
+    never = tracking_flight()
+    assert never.step(drone=drone(height=4.0), pad=pad(never.t + 1 / 30), vision_age=None).command.vz > 0.5
+    assert "pad not seen for ever" in never.lines[-1]
+
+
 def test_tracking_closes_an_along_track_gap_more_gently_the_later_the_camera_sees():
     """The camera latency of the inputs reaches the controller: a pad 0.3 m ahead along its travel (+x, at the
     drone's own 1 m/s) is closed at along_track_gain in realistic's 0.1 s, at along_track_gain_latency / 0.2 in

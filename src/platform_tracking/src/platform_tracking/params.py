@@ -176,6 +176,7 @@ class TrackingParams:
     gate_timeout: float = spec(4.0, 0.1, 120.0, "s")
     vision_timeout: float = spec(0.3, 0.01, 10.0, "s")
     search_view_after: float = spec(0.5, 0.0, 60.0, "s")
+    search_climb_after: float = spec(2.0, 0.0, 600.0, "s")
     gate_vision_age: float = spec(0.1, 0.0, 10.0, "s")
     gate_max_speed_change: float = spec(1.2, 0.0, 50.0, "m/s^2")
     gate_max_speed_change_change: float = spec(0.3, 0.0, 50.0, "m/s^2")

@@ -5,7 +5,8 @@ States and what the drone does in each (heights are above the pad, measured from
 - LANDED: nothing is commanded (another module or the operator may fly the drone).
 - TAKING_OFF: ``ardrone/takeoff`` is sent, then the drone climbs at ``takeoff_climb_rate`` to
   ``nominal_height`` while it already follows the pad horizontally whenever a prediction is fresh.
-- TRACKING: PID on the predicted pad position at ``nominal_height`` (see controller.py).
+- TRACKING: PID on the predicted pad position at ``nominal_height`` (see controller.py); with the pad unseen
+  for ``search_climb_after`` (or never seen) at ``relocate_height`` instead, for a wider view.
 - LANDING: descends at ``landing_descent_rate`` while tracking, but only while the horizontal error
   and the relative velocity are small; it holds its height while they are not, and climbs while the
   error is so large for its height that the pad could leave the (narrower, lower down) view, or
@@ -119,6 +120,7 @@ class TrackingStateMachine:
         # TRACKING
         self.settled_since = None
         self.refusal_logged = False
+        self.searching_logged = False
         # LANDING
         self.committed = False
         self.land_sent_at = None
@@ -155,6 +157,7 @@ class TrackingStateMachine:
         self.entered = t
         self.settled_since = None
         self.refusal_logged = False
+        self.searching_logged = False
         self.committed = False
         self.land_sent_at = None
         self.takeoff_resends = 0
@@ -398,8 +401,18 @@ class TrackingStateMachine:
                 self.refusal_logged = True
         height = self._height(drone, pad, t)
         self._out.height = height
-        vz = climb_rate_towards(height, p.nominal_height, p)
+        vz = climb_rate_towards(height, p.relocate_height if self._out_of_view(inp) else p.nominal_height, p)
         self._out.command = self._command(self._tracking_xy(t, drone, pad), vz, drone.yaw)
+
+    def _out_of_view(self, inp):
+        """Tracking: the pad unseen for search_climb_after (or never): the prediction may be off by more than
+        the view (logged once each time)."""
+        unseen = inp.vision_age is None or inp.vision_age > self.p.search_climb_after
+        if unseen and not self.searching_logged:
+            self._event("pad not seen for %s: climbing to %.1f m for a wider view" % (
+                "ever" if inp.vision_age is None else "%.1f s" % inp.vision_age, self.p.relocate_height))
+        self.searching_logged = unseen
+        return unseen
 
     def _landing(self, inp):
         p, t, drone, pad = self.p, inp.time, inp.drone, self.last_pad
