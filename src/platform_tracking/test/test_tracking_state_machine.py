@@ -191,7 +191,8 @@ def test_tracking_holds_the_nominal_height():
 def test_tracking_climbs_for_a_wider_view_while_the_pad_stays_unseen_and_comes_back_once_it_is_seen():
     """The prediction rests on GPS: 4-6 m off in harsh, the pad outside a 4 m view for good."""
     f = tracking_flight()
-    assert f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30), vision_age=P.search_climb_after - 0.1).command.vz == 0.0
+    early = f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30), vision_age=P.search_climb_after - 0.1)
+    assert early.command.vz == 0.0
     out = f.step(drone=drone(height=4.0), pad=pad(f.t + 1 / 30), vision_age=P.search_climb_after + 0.1)
     assert out.command.vz > 0.5 and f.state == State.TRACKING
     assert f.lines[-1] == "TRACKING: pad not seen for %.1f s: climbing to %.1f m for a wider view" % (

@@ -75,7 +75,8 @@ def check_expectations(expect, result):
     errors = result.get("callback_errors") or {}
     if errors:  # a node lived on past an exception, and lost what its callback was doing: a bug, whatever the outcome
         problems.append("exception(s) in callbacks: %s" % ", ".join(
-            "%s %d times (%s)" % (node, e["count"], e["first"].strip().splitlines()[-1]) for node, e in sorted(errors.items())))
+            "%s %d times (%s)" % (node, e["count"], e["first"].strip().splitlines()[-1])
+            for node, e in sorted(errors.items())))
     return not problems, "; ".join(problems)
 
 
