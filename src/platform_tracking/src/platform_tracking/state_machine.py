@@ -257,9 +257,12 @@ class TrackingStateMachine:
 
     def _searching(self):
         """True while the pad has not been seen for search_view_after (or ever), tracking or descending."""
-        age = self._vision_age
-        return (age is None or age > self.p.search_view_after) and self.state in (
+        return self._unseen_for(self.p.search_view_after) and self.state in (
             State.TRACKING, State.LANDING, State.RELOCATING)
+
+    def _unseen_for(self, seconds):
+        """The pad not seen for more than ``seconds`` at this step, or never."""
+        return self._vision_age is None or self._vision_age > seconds
 
     # ----- the step ------------------------------------------------------------------------------
     def step(self, inputs: Inputs) -> Outputs:
@@ -407,7 +410,7 @@ class TrackingStateMachine:
     def _out_of_view(self, inp):
         """Tracking: the pad unseen for search_climb_after (or never): the prediction may be off by more than
         the view (logged once each time)."""
-        unseen = inp.vision_age is None or inp.vision_age > self.p.search_climb_after
+        unseen = self._unseen_for(self.p.search_climb_after)
         if unseen and not self.searching_logged:
             self._event("pad not seen for %s: climbing to %.1f m for a wider view" % (
                 "ever" if inp.vision_age is None else "%.1f s" % inp.vision_age, self.p.relocate_height))
