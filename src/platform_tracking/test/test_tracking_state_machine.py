@@ -347,29 +347,38 @@ def test_landing_descends_at_the_landing_rate_while_the_error_is_small():
 
 def test_landing_stops_descending_while_the_error_or_relative_speed_is_too_large():
     f = landing_flight()
-    out = f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=0.4))   # descend < 0.4 < hold
+    out = f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=0.8))   # descend < 0.8 < hold
     assert out.command.vz == 0.0 and f.state == State.LANDING
     out = f.step(drone=drone(height=2.0, vx=-1.0), pad=pad(f.t + 1 / 30))   # closing at 1 m/s
     assert out.command.vz == 0.0
+
+
+def test_the_error_that_still_lets_the_drone_descend_grows_with_its_height():
+    """Higher up the camera's view is wider: an error that holds the drone at 1 m does not stop its descent at 3 m."""
+    error = P.descend_max_error + P.descend_error_per_metre * 1.0
+    for height, expected in ((3.0, -P.landing_descent_rate), (1.0, 0.0)):
+        f = landing_flight(height=height)
+        out = f.step(drone=drone(height=height), pad=pad(f.t + 1 / 30, x=error))
+        assert f.state == State.LANDING and out.command.vz == pytest.approx(expected), height
 
 
 def test_a_landing_hold_keeps_the_lowest_height_since_the_last_climb_against_the_firmwares_drift():
     """Holding is a height hold on the measured height, not a zero climb rate: the firmware holds its own altitude
     estimate, which drifts with its accelerometer's bias. Short descents between holds do not reset it upwards."""
     f = landing_flight()
-    out = f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=0.4))   # outside the descent cone: hold at 2.0 m
+    out = f.step(drone=drone(height=2.0), pad=pad(f.t + 1 / 30, x=0.8))   # outside the descent cone: hold at 2.0 m
     assert out.command.vz == 0.0
-    out = f.step(drone=drone(height=2.3), pad=pad(f.t + 1 / 30, x=0.4))   # the drone rose 0.3 m meanwhile
+    out = f.step(drone=drone(height=2.3), pad=pad(f.t + 1 / 30, x=0.8))   # the drone rose 0.3 m meanwhile
     assert out.command.vz == pytest.approx(-0.3 * P.height_gain)
-    out = f.step(drone=drone(height=1.9), pad=pad(f.t + 1 / 30, x=0.4))   # lower: held there from now on
+    out = f.step(drone=drone(height=1.9), pad=pad(f.t + 1 / 30, x=0.8))   # lower: held there from now on
     assert out.command.vz == 0.0
     out = f.step(drone=drone(height=2.2), pad=pad(f.t + 1 / 30))            # on target: a short descent...
     assert out.command.vz == pytest.approx(-P.landing_descent_rate)
-    out = f.step(drone=drone(height=2.2), pad=pad(f.t + 1 / 30, x=0.4))   # ...and the hold is still at 1.9 m
+    out = f.step(drone=drone(height=2.2), pad=pad(f.t + 1 / 30, x=0.8))   # ...and the hold is still at 1.9 m
     assert out.command.vz == pytest.approx(-0.3 * P.height_gain)
     out = f.step(drone=drone(height=1.0), pad=pad(f.t + 1 / 30, x=P.hold_max_error + P.hold_error_per_metre + 0.1))
     assert out.command.vz == pytest.approx(P.retry_climb_rate)              # a deliberate climb...
-    out = f.step(drone=drone(height=1.6), pad=pad(f.t + 1 / 30, x=0.4))   # ...and the hold begins where it ended
+    out = f.step(drone=drone(height=1.6), pad=pad(f.t + 1 / 30, x=0.8))   # ...and the hold begins where it ended
     assert out.command.vz == 0.0
 
 
@@ -378,8 +387,8 @@ def test_landing_descends_on_through_the_flows_blend_over_a_fast_vehicle():
     would hold the height elsewhere does not: holding there only lets it grow."""
     for weight, speed, expected in ((0.5, 15.0, -P.blend_descent_rate), (0.0, 15.0, 0.0), (0.5, 2.0, 0.0)):
         f = landing_flight(height=2.5)
-        t = f.t + 1 / 30  # the drone 0.5 m behind the pad: above descend_max_error, below the climbing error
-        out = f.step(drone=drone(x=speed * t - 0.5, height=2.5, vx=speed), pad=pad(t, x=speed * t, vx=speed),
+        t = f.t + 1 / 30  # the drone 0.9 m behind the pad: outside the descent cone, inside the climbing one
+        out = f.step(drone=drone(x=speed * t - 0.9, height=2.5, vx=speed), pad=pad(t, x=speed * t, vx=speed),
                      flow_weight=weight)
         assert f.state == State.LANDING, (weight, speed)
         assert out.command.vz == pytest.approx(expected), (weight, speed)

@@ -162,6 +162,7 @@ class TrackingParams:
     # landing
     landing_descent_rate: float = spec(0.5, 0.05, 3.0, "m/s")
     descend_max_error: float = spec(0.25, 0.01, 10.0, "m")
+    descend_error_per_metre: float = spec(0.2, 0.0, 10.0, "m/m")
     descend_max_relative_speed: float = spec(0.5, 0.01, 10.0, "m/s")
     hold_max_error: float = spec(0.35, 0.01, 10.0, "m")
     hold_error_per_metre: float = spec(0.4, 0.0, 10.0, "m/m")
@@ -208,6 +209,10 @@ class TrackingParams:
         if not self.descend_max_error <= self.hold_max_error <= self.abort_error:
             problems.append("expected descend_max_error <= hold_max_error <= abort_error, got %g, %g, %g m" % (
                 self.descend_max_error, self.hold_max_error, self.abort_error))
+        if self.descend_error_per_metre > self.hold_error_per_metre:
+            problems.append("descend_error_per_metre (%g m/m) must not exceed hold_error_per_metre (%g m/m): the "
+                            "drone would descend where it must climb" % (self.descend_error_per_metre,
+                                                                         self.hold_error_per_metre))
         if not self.gate_height <= self.commit_height < self.retry_height:
             problems.append("expected gate_height <= commit_height < retry_height, got %g, %g, %g m" % (
                 self.gate_height, self.commit_height, self.retry_height))

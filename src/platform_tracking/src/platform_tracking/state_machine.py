@@ -474,6 +474,7 @@ class TrackingStateMachine:
         may_commit = height <= p.commit_height + 0.05
         # Lower down the view is narrower: the error that risks losing the pad from view shrinks with height.
         climb_error = p.hold_max_error + p.hold_error_per_metre * height
+        descend_error = p.descend_max_error + p.descend_error_per_metre * max(0.0, height - p.gate_height)
 
         if self.retrying:
             if height >= p.retry_height - 0.05:
@@ -512,7 +513,7 @@ class TrackingStateMachine:
             vz = p.retry_climb_rate
         elif not seen:
             vz = self._hold_height(height)
-        elif distance <= p.descend_max_error and relative_speed <= p.descend_max_relative_speed and not at_gate:
+        elif distance <= descend_error and relative_speed <= p.descend_max_relative_speed and not at_gate:
             vz = -p.landing_descent_rate if height > p.gate_height + 0.1 else \
                 climb_rate_towards(height, p.gate_height, p, limit=p.landing_descent_rate)
         elif at_gate:
