@@ -77,3 +77,5 @@ def test_inconsistent_parameters_are_rejected_by_check():
         TrackingParams(found_max_age=2.0).check()
     with pytest.raises(ParamError, match="hold_max_error"):
         TrackingParams(hold_max_error=2.0).check()
+    with pytest.raises(ParamError, match="descend_error_per_metre .* must not exceed hold_error_per_metre"):
+        TrackingParams(descend_error_per_metre=0.5).check()
