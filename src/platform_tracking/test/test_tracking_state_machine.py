@@ -429,6 +429,16 @@ def test_landing_back_to_tracking_when_the_error_exceeds_abort_error():
     assert f.state == State.LANDING
 
 
+def test_higher_up_the_landing_climbs_instead_of_aborting_while_the_error_is_within_the_climbs_limit():
+    f = tracking_flight()
+    f.run(P.min_tracking_time + P.settle_time + 0.2, make=fresh(height=4.0))
+    assert f.state == State.LANDING
+    height = 4.0
+    assert P.abort_error + 0.1 < P.hold_max_error + P.hold_error_per_metre * height
+    out = f.step(drone=drone(height=height), pad=pad(f.t + 1 / 30, x=P.abort_error + 0.1))
+    assert f.state == State.LANDING and out.command.vz >= 0.0
+
+
 def test_decisions_go_by_the_drone_not_by_the_view_it_searches_with():
     """The pad unseen for longer than search_view_after: the tracker flies the camera's view centre over it, but
     the errors that decide (here: calling the landing off) are the drone's. Leaning 20 deg in a corner at 4 m the
