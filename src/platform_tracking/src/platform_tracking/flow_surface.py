@@ -18,6 +18,7 @@ height from the sonar), the predicted pad and what the flow can follow on the ve
 the pad, config/flow_surface_<vehicle>.yaml: the pad itself): the stack knows its drone's firmware as a calibration would tell it,
 not from the simulator.
 """
+import collections
 import math
 
 import numpy as np
@@ -71,3 +72,33 @@ class FlowSurface:
         """The part of the pad's velocity (world x, y) the flow takes off the drone's: w v_pad."""
         w = self.weight(drone_position, orientation_wxyz, pad_position, pad_velocity)
         return w * np.asarray(pad_velocity[:2], dtype=float)
+
+
+class WeightForecast:
+    """The flow's weight at a later instant: the latest, moved on along its slope over the last ``window``
+    seconds (a straight-line fit). The weight the tracker reads is a navdata old and its command reaches the
+    drone a link's delay later; descending over a car at 15 m/s the weight rose 0.2 in 0.1 s, and 0.1 of it
+    is 1.5 m/s the command does not take off."""
+
+    def __init__(self, window=0.1):
+        self.window = window
+        self.samples = collections.deque()  # (time, weight)
+
+    def add(self, t, weight):
+        if self.samples and t < self.samples[-1][0]:
+            self.samples.clear()  # time went back
+        self.samples.append((t, weight))
+        while len(self.samples) > 2 and self.samples[0][0] < t - self.window:
+            self.samples.popleft()
+
+    def at(self, t):
+        if not self.samples:
+            return 0.0
+        last_t, last = self.samples[-1]
+        if len(self.samples) < 2:
+            return last
+        times = np.array([s[0] for s in self.samples])
+        weights = np.array([s[1] for s in self.samples])
+        span = times - times.mean()
+        slope = float(span @ (weights - weights.mean()) / (span @ span)) if span @ span > 0.0 else 0.0
+        return min(1.0, max(0.0, last + slope * (t - last_t)))

@@ -52,7 +52,7 @@ from std_msgs.msg import Bool, Empty, Float64, String
 from .camera_latency import CameraLatency
 from .controller import DroneState, PadPrediction
 from .estimator import DroneEstimator, StateHistory
-from .flow_surface import FlowSurface
+from .flow_surface import FlowSurface, WeightForecast
 from .relative import RelativeTrack
 from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
 from .state_machine import AIRBORNE_NAV, Inputs, State, TrackingStateMachine
@@ -316,6 +316,7 @@ class TrackingNode:
         self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
         self.estimate = None          # (stamp, DroneState without sonar)
         self.unseen = None            # (stamp, world xy, weight) of the vehicle's velocity the flow does not see
+        self.flow_weight = WeightForecast()
         self.sonar = None             # median of the last three sonar ranges (a spurious echo is one of them), or None
         self.sonar_ranges = collections.deque(maxlen=3)
         self.navdata_state = None
@@ -379,6 +380,7 @@ class TrackingNode:
         with self.lock:
             self.unseen = (stamp_of(msg), np.array([msg.vector.x, msg.vector.y]),
                            float(msg.vector.z) if math.isfinite(msg.vector.z) else 0.0)
+            self.flow_weight.add(self.unseen[0], self.unseen[2])
             # What the flow itself measured: the estimate's velocity less the part of the vehicle's it did not see.
             drone = self._estimate_at(self.unseen[0])
             if drone is not None:
@@ -512,10 +514,8 @@ class TrackingNode:
                 state = self.estimate[1]
                 drone = dataclasses.replace(state, sonar_height=self.sonar).moved(t - self.estimate[0])
             fresh = self.unseen is not None and t - self.unseen[0] <= ESTIMATE_MAX_AGE
-            # The latest weight as measured. Its slope over the last 0.1 s is mostly noise in the blend: extrapolated
-            # to when the command reaches the drone it told the firmware's weight worse than the latest (harsh cars
-            # at 10 and 15 m/s: error rms 0.21-0.28 against 0.18-0.21, overshooting 0.4 to 1 as the rise flattened).
-            flow_weight = self.unseen[2] if fresh else 0.0
+            # The weight when the command reaches the drone: a navdata old now, and a link's delay later.
+            flow_weight = self.flow_weight.at(t + self.params.flow_weight_lead) if fresh else 0.0
             requests = self._take_requests()
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in requests, land="land" in requests,

@@ -145,6 +145,7 @@ class TrackingParams:
     lookahead: float = spec(0.3, 0.0, 5.0, "s")
     velocity_lead: float = spec(0.15, 0.0, 5.0, "s")
     flow_time_lead: float = spec(0.17, 0.0, 5.0, "s")
+    flow_weight_lead: float = spec(0.05, 0.0, 1.0, "s")
     acceleration_window: float = spec(0.5, 0.0, 10.0, "s")
     max_correction_speed: float = spec(3.0, 0.0, 40.0, "m/s")
     max_horizontal_speed: float = spec(20.0, 0.1, 40.0, "m/s")
