@@ -429,7 +429,7 @@ def test_landing_back_to_tracking_when_the_error_exceeds_abort_error():
     assert f.state == State.LANDING
 
 
-def test_higher_up_the_landing_climbs_instead_of_aborting_while_the_error_is_within_the_climbs_limit():
+def test_higher_up_the_landing_holds_instead_of_aborting_while_the_error_is_within_the_climbs_limit():
     f = tracking_flight()
     f.run(P.min_tracking_time + P.settle_time + 0.2, make=fresh(height=4.0))
     assert f.state == State.LANDING

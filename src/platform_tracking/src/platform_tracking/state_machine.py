@@ -443,8 +443,9 @@ class TrackingStateMachine:
         height = self._height(drone, pad, t)
         # Lower down the view is narrower: the error that risks losing the pad from view shrinks with height.
         climb_error = p.hold_max_error + p.hold_error_per_metre * height
-        # Higher up the view holds more than abort_error, and the climb below keeps the pad in it: in harsh, on a
-        # square at 3 m/s in wind, each corner aborted a landing at 3.5 m, and each abort cost 13-20 s of settling.
+        # Higher up the view holds more than abort_error: there the landing is given up only where it would
+        # otherwise climb (above 2.9 m, so, it holds its height instead). In harsh, on a square at 3 m/s in wind,
+        # each corner aborted a landing at 3.5 m, and each abort cost 13-20 s of settling.
         abort_error = max(p.abort_error, climb_error)
         if distance > abort_error:
             self._transition(State.TRACKING, "error %.2f m > abort_error %.2f m at %.2f m: back to nominal height to "
