@@ -23,16 +23,19 @@ def footprint(camera_position, world_from_optical, rays, plane_z):
     """Corners (x, y) where ``rays`` (optical frame) from the camera at ``camera_position`` (world [m]),
     turned by the 3x3 rotation ``world_from_optical`` (rows), meet the plane z = ``plane_z``; None if the
     camera is not above the plane or a ray does not point down to it."""
-    drop = plane_z - camera_position[2]
+    # Plain floats: arithmetic on numpy's scalars, element by element, cost the estimator 3x the time.
+    cx, cy, cz = (float(v) for v in camera_position)
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = ((float(v) for v in row) for row in world_from_optical)
+    drop = float(plane_z) - cz
     if drop >= 0.0:
         return None
     corners = []
-    for ray in rays:
-        wx, wy, wz = (sum(row[i] * ray[i] for i in range(3)) for row in world_from_optical)
+    for x, y, z in rays:
+        wz = r20 * x + r21 * y + r22 * z
         if wz >= -1e-6:
             return None
         scale = drop / wz
-        corners.append((camera_position[0] + wx * scale, camera_position[1] + wy * scale))
+        corners.append((cx + (r00 * x + r01 * y + r02 * z) * scale, cy + (r10 * x + r11 * y + r12 * z) * scale))
     return corners
 
 
@@ -40,8 +43,8 @@ def coverage(corners, centre_xy, yaw, rectangle):
     """Share of the polygon ``corners`` (world x, y, convex) inside ``rectangle`` (x_min, x_max, y_min,
     y_max) of a frame at ``centre_xy`` turned by ``yaw`` [rad]."""
     c, s = math.cos(yaw), math.sin(yaw)
-    local = [(c * (x - centre_xy[0]) + s * (y - centre_xy[1]), -s * (x - centre_xy[0]) + c * (y - centre_xy[1]))
-             for x, y in corners]
+    ox, oy = float(centre_xy[0]), float(centre_xy[1])
+    local = [(c * (x - ox) + s * (y - oy), -s * (x - ox) + c * (y - oy)) for x, y in corners]
     whole = _area(local)
     if whole <= 1e-12:
         return 0.0
