@@ -49,6 +49,16 @@ def test_summary_groups_and_lists_every_miss():
     assert "- `c`: error (c.yaml: field 'name' is required)" in text
 
 
+def test_a_list_names_scenario_files_relative_to_itself_and_the_shipped_scope_list_names_existing_ones(tmp_path):
+    (tmp_path / "sets").mkdir()
+    listing = tmp_path / "sets" / "some.txt"
+    listing.write_text("# a comment\n\na.yaml  # the first\n../b.yaml\n")
+    assert benchmark.collect([str(listing)]) == [str(tmp_path / "sets" / "a.yaml"), str(tmp_path / "sets" / "../b.yaml")]
+    scope = os.path.join(os.path.dirname(__file__), "..", "..", "..", "scenarios", "target_scope.txt")
+    files = benchmark.collect([scope])
+    assert len(files) >= 80 and all(os.path.isfile(f) for f in files)
+
+
 def test_bad_scenario_file_is_an_error_row_not_a_success(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\nplatform: {speed_mps: fast}\n")

@@ -20,11 +20,16 @@ from .results_store import CSV_FIELDS, ResultsFile, ResultsFileError  # noqa: F4
 
 
 def collect(paths):
-    """Scenario files from files and directories (sorted, *.yaml / *.yml)."""
+    """Scenario files from files, directories (sorted, *.yaml / *.yml) and lists (*.txt: a scenario file a line,
+    relative to the list; blank lines and # comments skipped)."""
     found = []
     for path in paths:
         if os.path.isdir(path):
             found += sorted(os.path.join(path, f) for f in os.listdir(path) if f.endswith((".yaml", ".yml")))
+        elif path.endswith(".txt"):
+            with open(path) as stream:
+                lines = (line.split("#", 1)[0].strip() for line in stream)
+                found += [os.path.join(os.path.dirname(path), line) for line in lines if line]
         else:
             found.append(path)
     return found
