@@ -40,6 +40,7 @@ import numpy as np
 from landing_msgs.geometry import turned_about_world_z, yaw_from_quaternion
 
 from .flow_surface import rotation_of
+from .relative import RelativeTrack
 
 from .params import EstimatorParams
 
@@ -359,6 +360,10 @@ class DroneEstimator:
         self.modelled_weight = 0.0       # the model's, blended in as the firmware blends each flow reading [-]
         self.flow_weight_spread = 0.0    # how much the weight changes within weight_position_std of the estimate [-]
         self.rest_offset = None          # the estimate minus the pad filter's position while it rode the pad (xy) [m]
+        # Where the pad is relative to the drone by the camera's fixes, carried on by the flow (_view_offset).
+        self.relative = RelativeTrack(params.relative_fix_gain, params.relative_max_age) \
+            if surface is not None and surface.enabled else None
+        self.pad_unseen = np.zeros(2)    # the pad filter's velocity as the flow does not see it (w v_pad, blended) [m/s]
         self.inertial = InertialVelocity(params.inertial_gain, params.inertial_reference_std) \
             if params.inertial_gain > 0.0 else None
         self.history = StateHistory(HISTORY_SPAN)  # (time, position, velocity) after each prediction
@@ -524,6 +529,11 @@ class DroneEstimator:
         self.modelled_unseen = (t, modelled)
         self.flow_heading = (vx_heading, vy_heading, vz)
         self.flow_time = t
+        if self.relative is not None and self.pad_state is not None and abs(t - self.pad_state[0]) <= PAD_MAX_AGE:
+            # d/dt (pad - drone) = v_pad - (seen + w v_pad): where the flow sees the pad alone, the pad's velocity
+            # cancels, whatever its error (relative.py).
+            seen = self.horizontal.world_velocity(self.flow_heading, self.yaw)
+            self.relative.add_rate(t, self.pad_state[2][:2] - self.pad_unseen - seen)
         unseen = modelled
         if self.inertial is not None:
             seen = self.horizontal.world_velocity(self.flow_heading, self.yaw)
@@ -544,6 +554,12 @@ class DroneEstimator:
     def pad(self, t, position, velocity):
         """The pad's predicted state at ``t``: world position [m] and velocity [m/s]."""
         self.pad_state = (t, np.asarray(position, dtype=float), np.asarray(velocity, dtype=float))
+
+    def pad_fix(self, t, relative_xy):
+        """The camera's fix of the pad at its image's capture time ``t``: the pad minus the drone as published then
+        (world x, y) [m]."""
+        if self.relative is not None:
+            self.relative.add_fix(t, relative_xy)
 
     def vehicle(self, t, velocity_xy, yaw_rate=0.0):
         """The vehicle's own report at ``t``: world velocity [m/s] and yaw rate [rad/s]."""
@@ -566,17 +582,17 @@ class DroneEstimator:
         blended in over the firmware's response time as the firmware blends each flow reading into its
         estimate (its accelerometer carries the fast part). Zero away from the vehicle or without a pad."""
         last_t, last = self.modelled_unseen
-        target, weight, spread = np.zeros(2), 0.0, 0.0
+        target, weight, spread, pad_target = np.zeros(2), 0.0, 0.0, np.zeros(2)
         if self.surface is not None and self.surface.enabled and self.pad_state is not None and self.ready:
             pad_t, pad_position, pad_velocity = self.pad_state
             vehicle_velocity = self._vehicle_velocity(t)
             if abs(t - pad_t) <= PAD_MAX_AGE and vehicle_velocity is not None:
                 pad_now = pad_position + pad_velocity * (t - pad_t)
-                position, orientation = self._anchored_position(pad_now, t, vehicle_velocity), self._orientation_at(t)
+                position, orientation = self._view_position(pad_now, t, vehicle_velocity), self._orientation_at(t)
                 weight = self.surface.weight(position, orientation, pad_now, vehicle_velocity)
                 if weight <= 0.0 and self.airborne:
                     self.rest_offset = None  # the view has left the vehicle: the anchor is spent
-                target = weight * vehicle_velocity
+                target, pad_target = weight * vehicle_velocity, weight * pad_velocity[:2]
                 if self.inertial is not None:
                     # The height above the pad comes from the sonar (centimetres), the rest from GPS and vision.
                     steps = self.p.weight_position_std * np.diag([1.0, 1.0, 0.25])
@@ -593,9 +609,11 @@ class DroneEstimator:
             self.counters["flow_over_vehicle"] += 1
         if last_t is None or t <= last_t or self.surface is None:
             self.modelled_weight = self.flow_weight = weight
+            self.pad_unseen = pad_target
             return target
         blend = 1.0 - math.exp(-(t - last_t) / self.surface.p.flow_time_constant)
         self.modelled_weight += blend * (weight - self.modelled_weight)
+        self.pad_unseen = self.pad_unseen + blend * (pad_target - self.pad_unseen)
         self.flow_weight = self.modelled_weight
         return last + blend * (target - last)
 
@@ -607,6 +625,20 @@ class DroneEstimator:
             if stamp <= t + 1e-9:
                 return turned_about_world_z(orientation, turn)
         return turned_about_world_z(self.orientation, turn)
+
+    def _view_position(self, pad_position, t, vehicle_velocity):
+        """The drone's position for the view of the vehicle: below measured_weight_min_speed, where the weight is the
+        model's alone, the pad's less where the camera's fixes, carried on by the flow, have the pad relative to the
+        drone; else (no fix for relative_max_age, a faster vehicle) ``_anchored_position``. The estimate and the
+        pad filter each move by their own velocity, the estimate's over the pad by the vehicle's report: low over a
+        Summit XL speeding up they drifted 0.2 m apart within 0.1 s of the camera losing the pad's centre, the weight
+        went down with it, and so did the velocity the estimate adds back, which drew them further apart."""
+        position = self._anchored_position(pad_position, t, vehicle_velocity)
+        if self.relative is not None and float(np.hypot(*vehicle_velocity)) < self.p.measured_weight_min_speed:
+            relative = self.relative.at(t)
+            if relative is not None:
+                position[:2] = pad_position[:2] - relative[0]
+        return position
 
     def _anchored_position(self, pad_position, t, vehicle_velocity):
         """The drone's position for the view of the vehicle (``_position_over``), anchored to the pad from a rest

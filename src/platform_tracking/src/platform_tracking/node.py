@@ -1,7 +1,8 @@
 """The two thin ROS nodes of this package; all logic lives in estimator.py and state_machine.py.
 
 drone_estimator  ardrone/imu, ardrone/navdata, ardrone/gps/odom, ardrone/altimeter, ardrone/sonar_height
-                 (and, with ~flow_surface/enabled, kalman_platform_odom and vehicle/gps/odom)
+                 (and, with ~flow_surface/enabled, kalman_platform_odom, vehicle/gps/odom and
+                 platform/current_platform_position_in_world: where the flow sees the vehicle)
                  -> ardrone/odom_estimate (nav_msgs/Odometry in `world`, child ardrone/base_link, at the
                  IMU rate; twist.linear is the WORLD-frame velocity, as on ardrone/gps/odom and the
                  ground truth; twist.angular the body rates from the IMU), and ardrone/flow_unseen_velocity
@@ -127,6 +128,16 @@ def pad_odometry(msg, rejections):
     return stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z)
 
 
+def world_fix(msg, rejections):
+    """(stamp, world xy) of the camera's fix of the pad (platform/current_platform_position_in_world), or None after
+    logging why it was dropped."""
+    p = msg.point
+    problem = numbers_problem(MAX_POSITION_M, point=(p.x, p.y, p.z)) or header_problem(msg, WORLD_FRAMES[:1])
+    if problem:
+        return rejections.reject("platform/current_platform_position_in_world", problem)
+    return stamp_of(msg), np.array([p.x, p.y])
+
+
 def wait_for_clock():
     while not rospy.is_shutdown() and rospy.get_time() == 0.0:
         rospy.sleep(0.01)  # under /use_sim_time, time is 0 until the first /clock
@@ -155,9 +166,12 @@ class EstimatorNode:
         rospy.Subscriber("ardrone/gps/odom", Odometry, self.on_gps, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/altimeter", Altimeter, self.on_altimeter, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
+        self.published = StateHistory(ESTIMATE_HISTORY, keep=2)  # odom_estimate's xy, to take it off the fixes
         if self.surface.enabled:
             rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad, queue_size=5, tcp_nodelay=True)
             rospy.Subscriber("vehicle/gps/odom", Odometry, self.on_vehicle, queue_size=5, tcp_nodelay=True)
+            rospy.Subscriber("platform/current_platform_position_in_world", PointStamped, self.on_world_fix,
+                             queue_size=5, tcp_nodelay=True)
 
     def _new_estimator(self):
         return DroneEstimator(self.params, log=lambda line: rospy.loginfo("drone_estimator: %s", line),
@@ -168,6 +182,16 @@ class EstimatorNode:
         if pad:
             with self.lock:
                 self.estimator.pad(*pad)
+
+    def on_world_fix(self, msg):
+        """The camera's fix of the pad, placed in the world with the published estimate at its image's capture time:
+        less that estimate, the pad relative to the drone then."""
+        fix = world_fix(msg, self.rejections)
+        if fix:
+            with self.lock:
+                drone = self.published.at(fix[0], max_extrapolation=ESTIMATE_EXTRAPOLATION)
+                if drone is not None:
+                    self.estimator.pad_fix(fix[0], fix[1] - drone[0])
 
     def on_vehicle(self, msg):
         v, w = msg.twist.twist.linear, msg.twist.twist.angular.z
@@ -280,6 +304,9 @@ class EstimatorNode:
         velocity_variance = self.params.flow_velocity_std ** 2
         odom.twist.covariance = [velocity_variance if i in (0, 7, 14) else 0.0 for i in range(36)]
         self.publisher.publish(odom)
+        with self.lock:
+            self.published.add(estimate.time, np.array(estimate.position[:2], dtype=float),
+                               np.array(estimate.velocity[:2], dtype=float))
 
 
 def estimator_main():
@@ -395,15 +422,12 @@ class TrackingNode:
     def on_world_fix(self, msg):
         """The camera's fix of the pad in the world, placed with the drone's estimate at the image's capture time:
         less that estimate, the pad relative to the drone then (relative.py)."""
-        p = msg.point
-        problem = numbers_problem(MAX_POSITION_M, point=(p.x, p.y, p.z)) or header_problem(msg, WORLD_FRAMES[:1])
-        if problem:
-            return self.rejections.reject("platform/current_platform_position_in_world", problem)
-        t = stamp_of(msg)
-        with self.lock:
-            drone = self._estimate_at(t)
-            if drone is not None:
-                self.relative.add_fix(t, np.array([p.x, p.y]) - drone[0])
+        fix = world_fix(msg, self.rejections)
+        if fix:
+            with self.lock:
+                drone = self._estimate_at(fix[0])
+                if drone is not None:
+                    self.relative.add_fix(fix[0], fix[1] - drone[0])
 
     def on_path(self, msg):
         problem = header_problem(msg, WORLD_FRAMES[:1])

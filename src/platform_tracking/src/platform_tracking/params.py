@@ -84,6 +84,8 @@ class EstimatorParams:
     weight_position_std: float = spec(0.1, 0.0, 5.0, "m")
     measured_weight_min_speed: float = spec(4.0, 0.0, 100.0, "m/s")
     spread_hold_time: float = spec(0.5, 0.001, 10.0, "s")
+    relative_fix_gain: float = spec(0.5, 0.0, 1.0, "-")
+    relative_max_age: float = spec(2.0, 0.0, 10.0, "s")
     altimeter_std: float = spec(0.1, 0.001, 50.0, "m")
     altitude_process_noise: float = spec(0.001, 0.0, 10.0, "m^2/s")
     sonar_std: float = spec(0.02, 0.001, 1.0, "m")

@@ -45,11 +45,16 @@ class RelativeTrack:
         """A flow sample at ``t``: its velocity (world x, y) [m/s], the flow's weight [-] and the pad's predicted
         velocity [m/s] and acceleration [m/s^2]. Samples going back in time start the track afresh (the clock jumped
         back)."""
-        if self.motion and t < self.motion[-1][0]:
-            self.reset()
         rate = (1.0 - weight) * np.asarray(pad_velocity_xy, dtype=float) - np.asarray(seen_xy, dtype=float) + \
             weight * self.flow_lag * np.asarray(pad_acceleration_xy, dtype=float)
-        self.motion.append((t, rate))
+        self.add_rate(t, rate)
+
+    def add_rate(self, t, rate_xy):
+        """The rate of pad - drone (world x, y) [m/s] at ``t``, worked out by the caller; going back in time starts the
+        track afresh."""
+        if self.motion and t < self.motion[-1][0]:
+            self.reset()
+        self.motion.append((t, np.asarray(rate_xy, dtype=float)))
         while len(self.motion) > 2 and self.motion[0][0] < t - self.HISTORY:
             self.motion.popleft()
 
