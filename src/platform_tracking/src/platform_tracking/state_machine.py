@@ -274,11 +274,6 @@ class TrackingStateMachine:
         self._follow_lean(t, inputs.drone)
         if inputs.pad is not None:
             self.last_pad = self._relative_pad(inputs)
-            if self.last_pad is not inputs.pad:
-                # Placed by the flow between the fixes, the pad's place is a navdata old, not a camera latency: the
-                # along-track gain needs no cap (harsh, low over a Summit XL speeding up at 1 m/s^2: with the cap's
-                # 1.3 the drone fell 0.3 m behind at 0.35 m, and the camera lost the pad's centre).
-                self._camera_latency = 0.0
         if inputs.takeoff:
             self.takeoff_pending = True
         if inputs.land:
