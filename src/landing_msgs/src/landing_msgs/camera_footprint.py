@@ -23,7 +23,7 @@ def footprint(camera_position, world_from_optical, rays, plane_z):
     """Corners (x, y) where ``rays`` (optical frame) from the camera at ``camera_position`` (world [m]),
     turned by the 3x3 rotation ``world_from_optical`` (rows), meet the plane z = ``plane_z``; None if the
     camera is not above the plane or a ray does not point down to it."""
-    # Plain floats: arithmetic on numpy's scalars, element by element, cost the estimator 3x the time.
+    # Plain floats: arithmetic on numpy's scalars, element by element, took twice as long.
     cx, cy, cz = (float(v) for v in camera_position)
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = ((float(v) for v in row) for row in world_from_optical)
     drop = float(plane_z) - cz

@@ -360,7 +360,7 @@ class DroneEstimator:
         self.modelled_weight = 0.0       # the model's, blended in as the firmware blends each flow reading [-]
         self.flow_weight_spread = 0.0    # how much the weight changes within weight_position_std of the estimate [-]
         self.rest_offset = None          # the estimate minus the pad filter's position while it rode the pad (xy) [m]
-        # Where the pad is relative to the drone by the camera's fixes, carried on by the flow (_view_offset).
+        # Where the pad is relative to the drone by the camera's fixes, carried on by the flow (_view_position).
         self.relative = RelativeTrack(params.relative_fix_gain, params.relative_max_age) \
             if surface is not None and surface.enabled else None
         self.pad_unseen = np.zeros(2)    # the pad filter's velocity as the flow does not see it (w v_pad, blended) [m/s]
@@ -529,14 +529,13 @@ class DroneEstimator:
         self.modelled_unseen = (t, modelled)
         self.flow_heading = (vx_heading, vy_heading, vz)
         self.flow_time = t
+        seen = self.horizontal.world_velocity(self.flow_heading, self.yaw)
         if self.relative is not None and self.pad_state is not None and abs(t - self.pad_state[0]) <= PAD_MAX_AGE:
             # d/dt (pad - drone) = v_pad - (seen + w v_pad): where the flow sees the pad alone, the pad's velocity
             # cancels, whatever its error (relative.py).
-            seen = self.horizontal.world_velocity(self.flow_heading, self.yaw)
             self.relative.add_rate(t, self.pad_state[2][:2] - self.pad_unseen - seen)
         unseen = modelled
         if self.inertial is not None:
-            seen = self.horizontal.world_velocity(self.flow_heading, self.yaw)
             vehicle_velocity = self._vehicle_velocity(t)
             speed = 0.0 if vehicle_velocity is None else float(np.hypot(*vehicle_velocity))
             resting = self._resting_velocity(t)
