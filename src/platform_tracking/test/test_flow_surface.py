@@ -21,7 +21,6 @@ def test_the_weight_is_one_low_over_the_pad_zero_high_above_it_and_off_when_disa
 
 
 def test_the_flow_weight_is_forecast_along_its_slope_and_kept_within_0_and_1():
-    from platform_tracking.flow_surface import WeightForecast
     forecast = WeightForecast(window=0.1)
     assert forecast.at(1.0) == 0.0
     for k in range(6):

@@ -304,9 +304,10 @@ class EstimatorNode:
         velocity_variance = self.params.flow_velocity_std ** 2
         odom.twist.covariance = [velocity_variance if i in (0, 7, 14) else 0.0 for i in range(36)]
         self.publisher.publish(odom)
-        with self.lock:
-            self.published.add(estimate.time, np.array(estimate.position[:2], dtype=float),
-                               np.array(estimate.velocity[:2], dtype=float))
+        if self.surface.enabled:  # only the flow over the vehicle needs the fixes taken back to the drone
+            with self.lock:
+                self.published.add(estimate.time, np.array(estimate.position[:2], dtype=float),
+                                   np.array(estimate.velocity[:2], dtype=float))
 
 
 def estimator_main():
