@@ -48,6 +48,8 @@ SIM_SCHEMA = {
         "flow_gain": Param(F, 0.1, 100.0, "1/s"),
         "height_gain": Param(F, 0.1, 100.0, "1/s"),
         "climb_gain": Param(F, 0.1, 100.0, "1/s^2"),
+        "climb_bias_gain": Param(F, 0.0, 100.0, "1/s^3"),
+        "baro_offset_gain": Param(F, 0.0, 100.0, "1/s"),
         "surface_step": Param(F, 0.01, 10.0, "m"),
         "surface_step_time": Param(F, 0.0, 10.0, "s"),
         "coverage_low": Param(F, 0.0, 1.0),
