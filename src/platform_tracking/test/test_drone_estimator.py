@@ -17,10 +17,11 @@ def yaw_quaternion(yaw):
 
 
 def fly(trajectory, seconds, seed=0, flow_bias=(0.0, 0.0), gps_outage=None, gps_offset=None, ground=0.0,
-        estimator=None, dt=0.002, gps_velocity=False, accelerometer=False, yaw_drift=0.0):
+        estimator=None, dt=0.002, gps_velocity=False, accelerometer=False, yaw_drift=0.0, climb_bias=lambda t: 0.0):
     """Feed ``trajectory(t) -> (position (3,), velocity (3,), yaw)`` through the sensors at their
     rates (with ``accelerometer`` the IMU's specific force too, the drone level; ``yaw_drift`` [rad] added to the
-    yaw the IMU reports, the flow staying in the drone's true heading frame); returns (times, true
+    yaw the IMU reports, the flow staying in the drone's true heading frame; ``climb_bias(t)`` [m/s] added to the
+    navdata's vertical velocity); returns (times, true
     positions, estimated positions, estimator) sampled at 100 Hz."""
     rng = np.random.default_rng(seed)
     est = estimator or DroneEstimator(EstimatorParams())
@@ -37,7 +38,7 @@ def fly(trajectory, seconds, seed=0, flow_bias=(0.0, 0.0), gps_outage=None, gps_
         if due["flow"]:
             fx, fy = world_to_heading(velocity[0], velocity[1], yaw)
             est.flow(t, fx + flow_bias[0] + rng.normal(0, FLOW_STD), fy + flow_bias[1] + rng.normal(0, FLOW_STD),
-                     velocity[2] + rng.normal(0, FLOW_STD))
+                     velocity[2] + climb_bias(t) + rng.normal(0, FLOW_STD))
         if due["gps"] and not (gps_outage and gps_outage[0] <= t < gps_outage[1]):
             fix = np.array(position) + rng.normal(0, GPS_STD, 3)
             if gps_offset and t >= gps_offset[0]:
@@ -224,8 +225,39 @@ def test_step_in_altitude_is_followed():
         vz = 1.0 if 10.0 <= t < 13.0 else 0.0
         return (0.0, 0.0, z), (0.0, 0.0, vz), 0.0
     times, truth, estimates, _ = fly(climb, 20.0, seed=5, ground=-100.0)  # sonar never sees the ground
-    z_error = np.abs(estimates[times >= 2.0, 2] - truth[times >= 2.0, 2])
+    # From 3 s: until the barometer has measured the climb rate's bias (initial_climb_bias_std) it is trusted more.
+    z_error = np.abs(estimates[times >= 3.0, 2] - truth[times >= 3.0, 2])
     assert z_error.max() < 0.12
+
+
+def test_a_biased_climb_rate_is_learnt_from_the_barometer_over_the_pad():
+    """The firmware's climb rate 0.3 m/s high in the take-off and 0.4 m/s while hovering over the pad (the sonar
+    sees the pad: no use to the altitude), as in a harsh flight where the estimate ran 1-3 m above the drone."""
+    def take_off(t):
+        z = min(4.0, 0.3 + 0.8 * t)
+        return (0.0, 0.0, z), (0.0, 0.0, 0.8 if z < 4.0 else 0.0), 0.0
+    times, truth, estimates, est = fly(take_off, 25.0, seed=6, ground=-100.0, dt=0.005,
+                                       climb_bias=lambda t: 0.3 if t < 5.0 else (0.4 if t < 15.0 else 0.0))
+    z_error = np.abs(estimates[:, 2] - truth[:, 2])
+    assert z_error.max() < 0.6
+    assert z_error[(times >= 8.0) & (times < 15.0)].max() < 0.15  # the bias learnt
+    assert z_error[times >= 18.0].max() < 0.2                      # and unlearnt when it went
+    assert est.counters["altimeter_reanchored"] == 0
+
+
+def test_an_altitude_the_barometer_keeps_rejecting_is_re_anchored_to_it():
+    """An estimate 2 m off rejects every barometric altitude as an outlier; after altimeter_max_rejections in a
+    row it takes the barometer's."""
+    est = DroneEstimator()
+    est.imu(0.0, (1.0, 0.0, 0.0, 0.0))
+    est.gps(0.0, (0.0, 0.0, 6.0))
+    est.altimeter(0.0, 6.0)
+    est.flow(0.0, 0.0, 0.0, 0.0)
+    used = [est.altimeter(0.05 * (k + 1), 4.0) for k in range(est.p.altimeter_max_rejections)]
+    assert not any(used[:-1]) and used[-1]
+    assert est.counters["altimeter_reanchored"] == 1
+    assert est.estimate().position[2] == pytest.approx(4.0, abs=0.01)
+    assert est.altimeter(0.05 * (len(used) + 1), 4.05)  # and goes on from there
 
 
 def test_gps_position_step_is_followed_smoothly():

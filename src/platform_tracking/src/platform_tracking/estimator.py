@@ -12,8 +12,8 @@ Ground truth never enters here (docs/conventions.md). The sensors and what each 
 - GPS velocity (5 Hz, 0.1 m/s): compared with the flow, it measures the flow's bias, so a biased flow
   is corrected instead of turning into a position error (differentiating the noisy positions for
   that would let their noise into the estimate).
-- Barometric altimeter (20 Hz, 0.1 m) and navdata ``vz``: the same filter along z. GPS altitude is a
-  weak extra measurement. The sonar (1 cm, but to whatever surface is below: pad, vehicle or ground)
+- Barometric altimeter (20 Hz, 0.1 m) and navdata ``vz``: a filter along z that also learns the bias of
+  ``vz`` (the firmware's climb estimate; ``VerticalFilter``). GPS altitude is a weak extra measurement. The sonar (1 cm, but to whatever surface is below: pad, vehicle or ground)
   corrects z only while it agrees with the estimate to within ``sonar_ground_gate``, i.e. while it
   can only be seeing the ground; over the pad it disagrees by the pad height and is ignored here (the
   tracker uses it directly as height above the pad).
@@ -65,35 +65,54 @@ def world_to_heading(vx, vy, yaw):
     return c * vx + s * vy, -s * vx + c * vy
 
 
-class AxisFilter:
-    """Kalman filter of one axis with state [position p]; the measured velocity is the input.
+class VerticalFilter:
+    """Kalman filter of the altitude with state [p, b]: ``b`` the bias of the navdata's vertical velocity.
 
-    Process noise per second: ``q_position`` (unmodelled errors) plus the integrated noise of the
-    measured velocity."""
+    The firmware's climb rate is its accelerometer integrated and pulled towards the sonar: a bias of the
+    accelerometer, a sonar reading two surfaces by turns or a take-off's transient left it 0.3-0.5 m/s off for
+    seconds (harsh), and integrated unchecked that put this estimate 1-3 m above the drone. The barometer and
+    the sonar over the ground measure ``p``; the bias follows from their disagreement with the climb rate.
 
-    def __init__(self, q_position, velocity_std):
-        self.q_position, self.velocity_std = q_position, velocity_std
-        self.p = 0.0
-        self.var = 0.0
+        p' = v - b   (v the navdata's climb rate)   or   p' = v   (a velocity without that bias: GPS, at rest)
+        b' = noise (``q_bias``)
+
+    Plain floats: a 2x2 filter is cheaper so than with numpy's arrays."""
+
+    def __init__(self, q_position, velocity_std, q_bias, bias_std):
+        self.q_position, self.velocity_std, self.q_bias, self.bias_std = q_position, velocity_std, q_bias, bias_std
+        self.p = self.bias = 0.0
+        self.var = self.cov = self.bias_var = 0.0  # P = [[var, cov], [cov, bias_var]]
         self.initialised = False
 
     def reset(self, position, variance):
-        self.p, self.var, self.initialised = position, variance, True
+        """A new altitude of ``variance``; the bias kept, uncertain again (a reset means the estimate was wrong)."""
+        self.p, self.var, self.cov, self.bias_var = position, variance, 0.0, self.bias_std ** 2
+        self.initialised = True
 
-    def predict(self, dt, velocity):
+    def predict(self, dt, velocity, biased):
+        """Move on by ``velocity`` [m/s], already less the bias when ``biased`` (the navdata's climb rate)."""
         if dt <= 0.0 or not self.initialised:
             return
         self.p += velocity * dt
+        if biased:  # F = [[1, -dt], [0, 1]]
+            self.var += -2.0 * dt * self.cov + dt * dt * self.bias_var
+            self.cov -= dt * self.bias_var
         self.var += self.q_position * dt + (self.velocity_std * dt) ** 2
+        self.bias_var += self.q_bias * dt
 
     def innovation(self, measured):
         """(innovation, its variance without the measurement noise)."""
         return measured - self.p, self.var
 
     def update(self, measured, variance):
-        gain = self.var / (self.var + variance)
-        self.p += gain * (measured - self.p)
-        self.var *= 1.0 - gain
+        s = self.var + variance
+        gain_p, gain_b = self.var / s, self.cov / s
+        innovation = measured - self.p
+        self.p += gain_p * innovation
+        self.bias += gain_b * innovation
+        self.bias_var -= gain_b * self.cov
+        self.cov -= gain_p * self.cov
+        self.var -= gain_p * self.var
 
     def position_at(self, dt, velocity):
         return self.p + velocity * dt
@@ -370,7 +389,9 @@ class DroneEstimator:
         self.horizontal = HorizontalFilter(params.position_process_noise, params.flow_bias_process_noise,
                                            params.flow_velocity_std, params.initial_flow_bias_std,
                                            params.flow_scale_process_noise, params.initial_flow_scale_std)
-        self.vertical = AxisFilter(params.altitude_process_noise, params.flow_velocity_std)
+        self.vertical = VerticalFilter(params.altitude_process_noise, params.flow_velocity_std,
+                                       params.climb_bias_process_noise, params.initial_climb_bias_std)
+        self.altimeter_rejections = 0    # barometric altitudes rejected in a row
         self.time = None                 # time the filters are at
         self.orientation = None          # last IMU orientation (w, x, y, z)
         self.yaw = 0.0
@@ -384,7 +405,7 @@ class DroneEstimator:
         # Part of the latest corrections not yet passed on to the published position (see estimate()).
         self.pending_correction = np.zeros(3)
         self.counters = {"gps_used": 0, "gps_rejected": 0, "gps_reanchored": 0, "sonar_used": 0,
-                         "altimeter_rejected": 0, "flow_over_vehicle": 0, "gps_velocity_landed": 0}
+                         "altimeter_rejected": 0, "altimeter_reanchored": 0, "flow_over_vehicle": 0, "gps_velocity_landed": 0}
 
     # ----- state ---------------------------------------------------------------------------------
     @property
@@ -420,10 +441,14 @@ class DroneEstimator:
             return resting
         if self._flow_fresh(t):
             vx, vy = self.horizontal.world_velocity(self.flow_heading, self.yaw, self._unseen_now())
-            return np.array([vx, vy, self.flow_heading[2]])
+            return np.array([vx, vy, self.flow_heading[2] - self.vertical.bias])
         if self.gps_velocity is not None and t - self.gps_velocity_time <= self.p.flow_timeout:
             return np.array(self.gps_velocity, dtype=float)
         return np.zeros(3)
+
+    def _climb_from_navdata(self, t):
+        """Whether ``_velocity``'s climb rate at ``t`` is the navdata's (and so carries its bias)."""
+        return self._resting_velocity(t) is None and self._flow_fresh(t)
 
     def _unseen_now(self):
         """What the motion model adds to the flow's velocity now: over the vehicle the part of its velocity the
@@ -445,7 +470,7 @@ class DroneEstimator:
             self.horizontal.predict_flow(dt, self.flow_heading, self.yaw, self._unseen_now())
         else:
             self.horizontal.predict_world(dt, self._velocity(self.time))
-        self.vertical.predict(dt, self._velocity(self.time)[2])
+        self.vertical.predict(dt, self._velocity(self.time)[2], biased=self._climb_from_navdata(self.time))
         self.pending_correction = self._correction_left(dt)
         self.time = t
         if self.ready:
@@ -737,9 +762,20 @@ class DroneEstimator:
             return True
         innovation, prior = self.vertical.innovation(altitude)
         if innovation ** 2 > 25.0 * (prior + variance):
+            # One wild altitude must not yank the estimate; many in a row mean the estimate is wrong: rejected for
+            # ever, the estimate ran 1-3 m above the drone while the barometer was right (harsh).
+            self.altimeter_rejections += 1
             self.counters["altimeter_rejected"] += 1
-            return False
-        self._update_vertical(altitude, variance)
+            if self.altimeter_rejections < self.p.altimeter_max_rejections:
+                return False
+            self.log("%d barometric altitudes in a row disagree with the estimate by %.2f m; re-anchoring to them"
+                     % (self.altimeter_rejections, innovation))
+            self.counters["altimeter_reanchored"] += 1
+            self.vertical.reset(altitude, variance)
+            self.pending_correction[2] = 0.0  # a real jump: published as one
+        else:
+            self._update_vertical(altitude, variance)
+        self.altimeter_rejections = 0
         return True
 
     def sonar(self, t, distance):
