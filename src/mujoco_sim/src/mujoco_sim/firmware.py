@@ -8,10 +8,11 @@ A real AR.Drone flies its velocity and altitude loops on what it measures, not o
   vehicle (the simulator blends the two by how much of the view the vehicle's textured part, the pad,
   covers: landing_msgs.camera_footprint).
 - Height and climb rate: the accelerometer, less its estimated vertical bias, pulled towards the sonar
-  height, i.e. the height above whatever surface is below (the drone follows gentle terrain). A sonar height far from the estimate is an
-  outlier unless it persists ``surface_step_time``: then the surface changed (the vehicle's edge passed
-  under) and the estimate takes the new height, while the altitude hold keeps the drone where it is (the
-  step is returned for the autopilot's reference; diving 1.7 m off a car's roof crashed it on the pad).
+  height, i.e. the height above whatever surface is below (the drone follows gentle terrain). A sonar
+  height far from the estimate is an outlier unless it persists ``surface_step_time``: then the surface
+  changed (the vehicle's edge passed under) and the estimate takes the new height, while the altitude hold
+  keeps the drone where it is (the step is returned for the autopilot's reference; diving 1.7 m off a
+  car's roof crashed it on the pad).
   Out of the sonar's range, and while a sonar height far from the estimate is not yet taken for a new
   surface, the barometer's changes carry the height on.
 

@@ -13,7 +13,8 @@ Ground truth never enters here (docs/conventions.md). The sensors and what each 
   is corrected instead of turning into a position error (differentiating the noisy positions for
   that would let their noise into the estimate).
 - Barometric altimeter (20 Hz, 0.1 m) and navdata ``vz``: a filter along z that also learns the bias of
-  ``vz`` (the firmware's climb estimate; ``VerticalFilter``). GPS altitude is a weak extra measurement. The sonar (1 cm, but to whatever surface is below: pad, vehicle or ground)
+  ``vz`` (the firmware's climb estimate; ``VerticalFilter``). GPS altitude is a weak extra measurement.
+  The sonar (1 cm, but to whatever surface is below: pad, vehicle or ground)
   corrects z only while it agrees with the estimate to within ``sonar_ground_gate``, i.e. while it
   can only be seeing the ground; over the pad it disagrees by the pad height and is ignored here (the
   tracker uses it directly as height above the pad).
@@ -76,7 +77,7 @@ class VerticalFilter:
         p' = v - b   (v the navdata's climb rate)   or   p' = v   (a velocity without that bias: GPS, at rest)
         b' = noise (``q_bias``)
 
-    Plain floats: a 2x2 filter is cheaper so than with numpy's arrays."""
+    On plain floats: for a 2x2 filter they are cheaper than numpy's arrays."""
 
     def __init__(self, q_position, velocity_std, q_bias, bias_std):
         self.q_position, self.velocity_std, self.q_bias, self.bias_std = q_position, velocity_std, q_bias, bias_std
@@ -405,7 +406,8 @@ class DroneEstimator:
         # Part of the latest corrections not yet passed on to the published position (see estimate()).
         self.pending_correction = np.zeros(3)
         self.counters = {"gps_used": 0, "gps_rejected": 0, "gps_reanchored": 0, "sonar_used": 0,
-                         "altimeter_rejected": 0, "altimeter_reanchored": 0, "flow_over_vehicle": 0, "gps_velocity_landed": 0}
+                         "altimeter_rejected": 0, "altimeter_reanchored": 0, "flow_over_vehicle": 0,
+                         "gps_velocity_landed": 0}
 
     # ----- state ---------------------------------------------------------------------------------
     @property
@@ -762,8 +764,8 @@ class DroneEstimator:
             return True
         innovation, prior = self.vertical.innovation(altitude)
         if innovation ** 2 > 25.0 * (prior + variance):
-            # One wild altitude must not yank the estimate; many in a row mean the estimate is wrong: rejected for
-            # ever, the estimate ran 1-3 m above the drone while the barometer was right (harsh).
+            # One wild altitude must not yank the estimate; many in a row mean the estimate is wrong (rejected for
+            # good, an estimate once stayed 1-3 m above the drone while the barometer was right: harsh).
             self.altimeter_rejections += 1
             self.counters["altimeter_rejected"] += 1
             if self.altimeter_rejections < self.p.altimeter_max_rejections:
