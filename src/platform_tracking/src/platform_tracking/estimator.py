@@ -435,22 +435,22 @@ class DroneEstimator:
         return None
 
     def _velocity(self, t):
-        """World velocity (x, y, z) the motion model integrates at ``t``: resting, ``_resting_velocity``; flying, the
-        flow while it is fresh, else the last GPS velocity while that is fresh, else none (the position then holds
-        while its variance grows)."""
+        """World velocity (x, y, z) the motion model integrates at ``t`` (``_motion``)."""
+        return self._motion(t)[0]
+
+    def _motion(self, t):
+        """(world velocity (x, y, z) the motion model integrates at ``t``, whether its climb rate is the navdata's
+        and so carries its bias): resting, ``_resting_velocity``; flying, the flow while it is fresh, else the last
+        GPS velocity while that is fresh, else none (the position then holds while its variance grows)."""
         resting = self._resting_velocity(t)
         if resting is not None:
-            return resting
+            return resting, False
         if self._flow_fresh(t):
             vx, vy = self.horizontal.world_velocity(self.flow_heading, self.yaw, self._unseen_now())
-            return np.array([vx, vy, self.flow_heading[2] - self.vertical.bias])
+            return np.array([vx, vy, self.flow_heading[2] - self.vertical.bias]), True
         if self.gps_velocity is not None and t - self.gps_velocity_time <= self.p.flow_timeout:
-            return np.array(self.gps_velocity, dtype=float)
-        return np.zeros(3)
-
-    def _climb_from_navdata(self, t):
-        """Whether ``_velocity``'s climb rate at ``t`` is the navdata's (and so carries its bias)."""
-        return self._resting_velocity(t) is None and self._flow_fresh(t)
+            return np.array(self.gps_velocity, dtype=float), False
+        return np.zeros(3), False
 
     def _unseen_now(self):
         """What the motion model adds to the flow's velocity now: over the vehicle the part of its velocity the
@@ -468,11 +468,12 @@ class DroneEstimator:
         dt = t - self.time
         if dt <= 0.0:
             return  # a late message is used as if taken now: its age is below one sample period
+        velocity, climb_from_navdata = self._motion(self.time)
         if self._flow_fresh(self.time):
             self.horizontal.predict_flow(dt, self.flow_heading, self.yaw, self._unseen_now())
         else:
-            self.horizontal.predict_world(dt, self._velocity(self.time))
-        self.vertical.predict(dt, self._velocity(self.time)[2], biased=self._climb_from_navdata(self.time))
+            self.horizontal.predict_world(dt, velocity)
+        self.vertical.predict(dt, velocity[2], biased=climb_from_navdata)
         self.pending_correction = self._correction_left(dt)
         self.time = t
         if self.ready:
