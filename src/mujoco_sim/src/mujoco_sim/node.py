@@ -29,6 +29,7 @@ from tf2_msgs.msg import TFMessage
 
 from .autopilot import FlightMode
 from .config import ConfigError
+from .frame_renderer import FRAME_TIMEOUT_S
 from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
 from .simulator import SONAR_FIELD_OF_VIEW_RAD, Simulator
@@ -405,17 +406,21 @@ class SimNode:
                 self.battery_written = level
 
     def _capture_camera(self, stamp):
-        """Render the frame now (its capture time is its stamp); it is published when the link delivers it."""
+        """Capture the frame now (its capture time is its stamp); it is rendered in the camera's thread and
+        published when the link delivers it (at once without latency: then the physics waits for it)."""
         t0 = time.perf_counter()
-        image = self.sim.render_camera()
+        frame = self.sim.capture_camera()
         self.timing["render"] += time.perf_counter() - t0
-        msg = Image(header=self._header(stamp, "ardrone/bottom_camera"), height=image.shape[0],
-                    width=image.shape[1], encoding="rgb8", is_bigendian=0, step=image.shape[1] * 3,
-                    data=image.tobytes())
         info = copy.copy(self.camera_info)
         info.header = self._header(stamp, self.camera_info.header.frame_id)
 
         def publish():
+            t0 = time.perf_counter()
+            image = frame.result(timeout=FRAME_TIMEOUT_S)
+            self.timing["render"] += time.perf_counter() - t0
+            msg = Image(header=self._header(stamp, "ardrone/bottom_camera"), height=image.shape[0],
+                        width=image.shape[1], encoding="rgb8", is_bigendian=0, step=image.shape[1] * 3,
+                        data=image.tobytes())
             self.pub_image.publish(msg)
             self._published(self.pub_image, stamp)
             self.pub_info.publish(info)
@@ -534,6 +539,9 @@ class SimNode:
         stats = {"sim_time": round(self.sim.time, 3), "wall_time": round(wall, 3),
                  "real_time_factor": round(sim_elapsed / wall, 3) if wall > 0 else 0.0}
         stats.update({"%s_share" % k: round(v / wall, 3) if wall > 0 else 0.0 for k, v in self.timing.items()})
+        # The camera thread's CPU beside the loop above (rendering and developing frames; "render" is the time
+        # the loop spent capturing them and waiting for them).
+        stats["camera_thread_share"] = round(self.sim.camera_thread_seconds() / wall, 3) if wall > 0 else 0.0
         self.pub_stats.publish(String(data=json.dumps(stats)))
 
     @staticmethod

@@ -662,46 +662,65 @@ class Simulator:
         """Optical-frame origin and rotation matrix in the drone body frame."""
         return self.model.cam_pos[self.camera].copy(), CAMERA_OPTICAL_IN_BODY
 
-    def _open_renderer(self):
+    def _open_camera(self):
         from .camera_model import Exposure, Lens
+        from .frame_renderer import FrameRenderer
         r, cam = self.realism, self.cfg["camera"]
         self.lens = Lens(self.camera_intrinsics(), self.camera_distortion())
         self.model.cam_fovy[self.camera] = self.lens.render_fovy_deg  # wide enough for the distorted corners
-        self._renderer = self._mj.Renderer(self.model, cam["height"], cam["width"])
-        self._camera_view = self._mj.MjvOption()
+        camera_view = self._mj.MjvOption()
         # The drone's geoms lie outside the camera's view; they are in the scene only to cast their shadow.
-        self._camera_view.geomgroup[DRONE_GEOM_GROUP] = int(r["shadows"])
-        self._camera_view.sitegroup[:] = 0  # site markers are not part of the world a camera sees
+        camera_view.geomgroup[DRONE_GEOM_GROUP] = int(r["shadows"])
+        camera_view.sitegroup[:] = 0  # site markers are not part of the world a camera sees
         self.exposure = Exposure(self.rng["exposure"], (cam["height"], cam["width"], 3), r["exposure_gain_std"],
                                  r["exposure_time_constant_s"], r["pixel_noise_std"])
+        self._renderer = FrameRenderer(self._mj, self.model, self.camera, cam["height"], cam["width"], camera_view,
+                                       self._develop)
+
+    def capture_camera(self, noise_std=None):
+        """Capture the bottom camera's frame of this instant: a Future of its RGB image (height, width, 3) uint8,
+        as the real camera delivers it (realism): distorted by the lens, blurred by the motion during the
+        exposure, its brightness wandering, noisy. It is rendered in the camera's thread while the physics
+        steps on (frame_renderer)."""
+        if self._renderer is None:
+            self._open_camera()
+        blur = self._motion_blur_px() if self.realism["camera_exposure_s"] > 0.0 else None
+        std = self.cfg["camera"]["noise"] if noise_std is None else noise_std
+        return self._renderer.capture(self.data, (blur, self.time, std))
 
     def render_camera(self, noise_std=None):
-        """RGB image (height, width, 3) uint8 from the bottom camera, as the real one delivers it (realism):
-        distorted by the lens, blurred by the motion during the exposure, its brightness wandering, noisy."""
-        if self._renderer is None:
-            self._open_renderer()
-        self._renderer.update_scene(self.data, camera=self.camera, scene_option=self._camera_view)
-        image = self.lens.apply(self._renderer.render())
-        if self.realism["camera_exposure_s"] > 0.0:
-            image = self._motion_blur(image)
-        image = self.exposure.apply(image, self.time)
-        std = self.cfg["camera"]["noise"] if noise_std is None else noise_std
-        if std > 0.0:
-            noisy = image + self.rng["camera"].normal(0.0, 255.0 * std, image.shape)
+        """The image of capture_camera(), waited for."""
+        from .frame_renderer import FRAME_TIMEOUT_S
+        return self.capture_camera(noise_std).result(timeout=FRAME_TIMEOUT_S)
+
+    def camera_thread_seconds(self):
+        """CPU seconds the camera's thread has spent rendering and developing frames so far [s]."""
+        return self._renderer.render_s if self._renderer is not None else 0.0
+
+    def _develop(self, rendered, job):
+        """The raw render of a frame as the camera delivers it (in the camera's thread, in capture order)."""
+        from .camera_model import motion_blur
+        blur, capture_time, noise_std = job
+        image = self.lens.apply(rendered)
+        if blur is not None:
+            image = motion_blur(image, *blur)
+        image = self.exposure.apply(image, capture_time)
+        if noise_std > 0.0:
+            noisy = image + self.rng["camera"].normal(0.0, 255.0 * noise_std, image.shape)
             image = np.clip(noisy, 0, 255).astype(np.uint8)
         return image
 
-    def _motion_blur(self, image):
-        from .camera_model import image_motion, motion_blur
+    def _motion_blur_px(self):
+        """(du, dv) [px]: how far the image moves during the exposure, from the motion of this instant."""
+        from .camera_model import image_motion
         velocity, omega = self.drone_velocity()
         position, quat = self.drone_pose()
         rotation = quat_to_matrix(quat)
         below = self._surface_velocity_below(position)
         optical_from_world = CAMERA_OPTICAL_IN_BODY @ rotation.T
         distance = self.sonar_distance_true(position, rotation)
-        du, dv = image_motion(self.camera_intrinsics()[2], self.realism["camera_exposure_s"],
-                              optical_from_world @ (velocity - below), CAMERA_OPTICAL_IN_BODY @ omega, distance)
-        return motion_blur(image, du, dv)
+        return image_motion(self.camera_intrinsics()[2], self.realism["camera_exposure_s"],
+                            optical_from_world @ (velocity - below), CAMERA_OPTICAL_IN_BODY @ omega, distance)
 
     def _over_vehicle(self, position):
         """Whether the point (x, y) of ``position`` lies above the vehicle's top rectangle."""
