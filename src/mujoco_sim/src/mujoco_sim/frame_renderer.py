@@ -34,6 +34,16 @@ class FrameRenderer:
         self._thread = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="camera")
         self.render_s = 0.0  # thread CPU seconds spent rendering and developing [s]
 
+    def warm_up(self):
+        """Create the OpenGL context and render once (the first frame costs the most) in the thread, now:
+        before the physics starts, not at its first frame."""
+        self._thread.submit(self._open_renderer)
+
+    def _open_renderer(self):
+        if self.renderer is None:
+            self.renderer = self._mj.Renderer(self.model, self.height, self.width)
+            self.renderer.render()
+
     def capture(self, data, job):
         """Snapshot ``data`` now; a Future of the developed image (``job`` is handed to ``develop``)."""
         try:
@@ -51,8 +61,7 @@ class FrameRenderer:
     def _render(self, snapshot, job):
         start = time.thread_time()
         try:
-            if self.renderer is None:
-                self.renderer = self._mj.Renderer(self.model, self.height, self.width)
+            self._open_renderer()
             self.renderer.update_scene(snapshot, camera=self.camera, scene_option=self.scene_option)
             image = self.develop(self.renderer.render(), job)
         finally:

@@ -236,6 +236,10 @@ class SimNode:
         # (a stop that closes the publishers mid-publish printed a traceback at one stop in three)
         try:
             with ended_by_shutdown():
+                if self.cfg["camera"]["enabled"]:
+                    # Now that the node is in the graph, while the rest of the graph starts (not at the first
+                    # frame of the flight, nor before this node has advertised its topics).
+                    self.sim.open_camera()
                 self._wait_for_start_signal()
                 self._step_and_publish(max_sim_time)
         finally:

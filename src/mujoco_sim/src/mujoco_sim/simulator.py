@@ -662,6 +662,13 @@ class Simulator:
         """Optical-frame origin and rotation matrix in the drone body frame."""
         return self.model.cam_pos[self.camera].copy(), CAMERA_OPTICAL_IN_BODY
 
+    def open_camera(self):
+        """Set up the camera (lens, exposure, its renderer thread) and warm its renderer up in the background;
+        otherwise the first frame does it (0.3 s of imports and OpenGL set-up amid the flight)."""
+        if self._renderer is None:
+            self._open_camera()
+            self._renderer.warm_up()
+
     def _open_camera(self):
         from .camera_model import Exposure, Lens
         from .frame_renderer import FrameRenderer
