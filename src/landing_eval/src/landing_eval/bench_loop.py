@@ -37,6 +37,16 @@ def node_cpu_per_sim_second(result):
             if name in first["nodes"] and first["nodes"][name]["pid"] == node["pid"]}
 
 
+def cpu_bound(cpu_per_sim_second, loop_rtf, cores):
+    """(how many of the ``cores`` the graph kept busy in flight, the real-time factor its CPU per sim second
+    allows at most on them with perfect overlap), or (None, None) without the figures. When the first comes
+    close to ``cores`` the loop is bound by its CPU, not by waits: only less CPU makes it faster."""
+    total = sum(cpu_per_sim_second.values())
+    if total <= 0.0 or not loop_rtf:
+        return None, None
+    return total * loop_rtf, cores / total
+
+
 def simulator_shares(bag):
     """The simulator's own accounting at the end of the closed-loop run (the last /sim_stats in the bag): the shares
     of its wall time spent in physics, rendering, publishing and waiting for the graph (lock-step), or {}."""
@@ -179,6 +189,12 @@ def report(rows):
     for name in names:
         print("| %s | %s |" % (name, " | ".join(_f(r["cpu"].get(name), 3) for r in rows)))
     print("| all | %s |" % " | ".join(_f(sum(r["cpu"].values()) if r["cpu"] else None, 3) for r in rows))
+    cores = len(os.sched_getaffinity(0))
+    for r in rows:
+        busy, ceiling = cpu_bound(r["cpu"], r["loop_rtf"], cores)
+        if busy is not None:
+            print("%s: the graph kept %.2f of %d cores busy in flight; its CPU allows at most %.1fx here" % (
+                r["profile"], busy, cores, ceiling))
     for r in rows:
         for node, functions in sorted(r.get("hot", {}).items()):
             print("\npy-spy, %s, %s: own time by function (share of samples)" % (r["profile"], node))
