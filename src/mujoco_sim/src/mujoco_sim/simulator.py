@@ -19,6 +19,7 @@ from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_mat
 from .config import ConfigError
 from .environment import Battery, Wind, aerodynamic_force
 from .firmware import FirmwareEstimator
+from .frame_renderer import FRAME_TIMEOUT_S, FrameRenderer
 from .realism import DelayLine, Dropouts, GaussMarkov, RandomWalk
 
 LOG = logging.getLogger("mujoco_sim.simulator")
@@ -671,7 +672,6 @@ class Simulator:
 
     def _open_camera(self):
         from .camera_model import Exposure, Lens
-        from .frame_renderer import FrameRenderer
         r, cam = self.realism, self.cfg["camera"]
         self.lens = Lens(self.camera_intrinsics(), self.camera_distortion())
         self.model.cam_fovy[self.camera] = self.lens.render_fovy_deg  # wide enough for the distorted corners
@@ -697,7 +697,6 @@ class Simulator:
 
     def render_camera(self, noise_std=None):
         """The image of capture_camera(), waited for."""
-        from .frame_renderer import FRAME_TIMEOUT_S
         return self.capture_camera(noise_std).result(timeout=FRAME_TIMEOUT_S)
 
     def camera_thread_seconds(self):
