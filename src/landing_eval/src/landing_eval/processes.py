@@ -185,9 +185,16 @@ def _address(hex_address, width):
     return str(address.ipv4_mapped or address) if address.version == 6 else str(address)
 
 
-def listening(pid):
-    """The TCP addresses ("address:port") process ``pid`` listens on."""
+def listening_of(pids):
+    """{key: the TCP addresses ("address:port") process pid listens on} for ``pids`` ({key: pid}), the machine's
+    sockets read once (/proc/net/tcp lists every socket of every run on the machine)."""
     inodes = _listening_inodes()
+    return {key: listening(pid, inodes) for key, pid in pids.items()}
+
+
+def listening(pid, inodes=None):
+    """The TCP addresses ("address:port") process ``pid`` listens on (``inodes``: _listening_inodes(), if read)."""
+    inodes = _listening_inodes() if inodes is None else inodes
     addresses = []
     try:
         for fd in os.listdir("/proc/%d/fd" % pid):
