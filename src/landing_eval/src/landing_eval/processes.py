@@ -189,12 +189,11 @@ def listening_of(pids):
     """{key: the TCP addresses ("address:port") process pid listens on} for ``pids`` ({key: pid}), the machine's
     sockets read once (/proc/net/tcp lists every socket of every run on the machine)."""
     inodes = _listening_inodes()
-    return {key: listening(pid, inodes) for key, pid in pids.items()}
+    return {key: _listening(pid, inodes) for key, pid in pids.items()}
 
 
-def listening(pid, inodes=None):
-    """The TCP addresses ("address:port") process ``pid`` listens on (``inodes``: _listening_inodes(), if read)."""
-    inodes = _listening_inodes() if inodes is None else inodes
+def _listening(pid, inodes):
+    """The TCP addresses ("address:port") process ``pid`` listens on; ``inodes``: _listening_inodes()."""
     addresses = []
     try:
         for fd in os.listdir("/proc/%d/fd" % pid):

@@ -689,8 +689,7 @@ class Simulator:
         as the real camera delivers it (realism): distorted by the lens, blurred by the motion during the
         exposure, its brightness wandering, noisy. It is rendered in the camera's thread while the physics
         steps on (frame_renderer)."""
-        if self._renderer is None:
-            self._open_camera()
+        self.open_camera()
         blur = self._motion_blur_px() if self.realism["camera_exposure_s"] > 0.0 else None
         std = self.cfg["camera"]["noise"] if noise_std is None else noise_std
         return self._renderer.capture(self.data, (blur, self.time, std))
