@@ -25,6 +25,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
 from std_msgs.msg import Empty, String
+from std_srvs.srv import Trigger, TriggerResponse
 from tf2_msgs.msg import TFMessage
 
 from .autopilot import FlightMode
@@ -38,6 +39,7 @@ NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF:
                  FlightMode.FLYING: Navdata.STATE_FLYING, FlightMode.LANDING: Navdata.STATE_LANDING,
                  FlightMode.CRASHED: Navdata.STATE_CRASHED}
 _NOTHING = object()
+RESET_TIMEOUT_S = 60.0  # how long a reset_world caller waits for the loop to take it (wall) [s]
 UNKNOWN_VARIANCE = 1e6  # covariance entry of a quantity not measured (the vehicle's position in a GPS dropout)
 WHEEL_JOINTS = ["summit_xl_front_left_wheel_joint", "summit_xl_front_right_wheel_joint",
                 "summit_xl_back_left_wheel_joint", "summit_xl_back_right_wheel_joint"]
@@ -69,26 +71,46 @@ class Schedule:
 
 class SimNode:
     def __init__(self):
+        # ROS time of the world's time 0 [s]: 0 until a reset_world, which starts a new world where ROS time
+        # stands (ROS time never runs backwards; the world's own time, and everything seeded, starts afresh).
+        self.time_origin = 0.0
+        self.model_file, self.viewer_requested, self.wait_for_start, self.cfg = self._read_parameters()
+        # Woken by the start signal and by a reset_world request (the physics may be held for either).
+        self.wake = threading.Event()
+        self.start_received = False
+        self.reset_requests = queue.SimpleQueue()
+        self.rejections = RosRejectionLog()  # garbage on the inputs: what was wrong, once per topic and kind
+        self.conditions = {}
+        self.rejected = {}  # condition -> the operator's invalid value, left in place and ignored
+        self.lockstep_subscriber = None
+        self._build_world()
+        self._init_publishers()
+        self._announce_world()
+        self._init_subscribers()
+        rospy.Service("~reset_world", Trigger, self._on_reset_world)
+
+    @staticmethod
+    def _read_parameters():
+        """(model file, viewer, wait_for_start, validated configuration) from the private parameters."""
         private = rospy.get_param("~", {})
-        self.model_file = private.pop("model_file", None)
-        if not self.model_file:
+        model_file = private.pop("model_file", None)
+        if not model_file:
             raise ConfigError("sim_node: required parameter '~model_file' (path of the MJCF world) is not set")
-        self.viewer_requested = bool(private.pop("viewer", False))
+        viewer = bool(private.pop("viewer", False))
         # A scenario runner starts the physics only once the whole graph (recorder included) listens.
-        self.wait_for_start = bool(private.pop("wait_for_start", False))
-        self.started = threading.Event()
-        self.cfg = validate_sim_config(private, "sim_node private parameters (%s)" % rospy.get_name())
+        wait_for_start = bool(private.pop("wait_for_start", False))
+        private.pop("realism_in_force", None)  # ours, written below (a reset reads the parameters again)
+        return model_file, viewer, wait_for_start, validate_sim_config(
+            private, "sim_node private parameters (%s)" % rospy.get_name())
+
+    def _build_world(self):
+        """The world of the parameters in force, at its time 0: what a fresh start builds."""
         self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
         lockstep = self.cfg["lockstep"]
-        self.rejections = RosRejectionLog()  # garbage on the inputs: what was wrong, once per topic and kind
         self.lockstep = LockstepGate(lockstep["max_lead_s"], lockstep["stale_after_wall_s"], log=rospy.loginfo) \
             if lockstep["enabled"] else None
-        self.conditions = {}
-        self.rejected = {}  # condition -> the operator's invalid value, left in place and ignored
         self._init_conditions()
-        self._init_publishers()
-        self._init_subscribers()
         rates = self.cfg["rates"]
         self.schedules = {name: Schedule(rates[name + "_hz"]) for name in (
             "clock", "ground_truth", "sonar", "altimeter", "gps", "joint_states", "tf", "conditions")}
@@ -105,10 +127,16 @@ class SimNode:
         self.last_touchdown = None
         self.timing = {"physics": 0.0, "render": 0.0, "publish": 0.0, "pacing": 0.0, "lockstep": 0.0}
 
-    # ----- set-up ------------------------------------------------------------------------------
+    def _now(self):
+        """ROS time of the world's present [s]."""
+        return self.time_origin + self.sim.time
+
     def _init_conditions(self):
         """Start from the global parameters where they are set and valid, else publish ours."""
         start = self.cfg["conditions"]
+        if self.conditions and _master_param("/drone_battery") == self.battery_written:
+            # A reset: the parameter holds our mirror of the drained battery, not an operator's level.
+            rospy.set_param("/drone_battery", self.start_battery)
         for name, spec in CONDITION_PARAMS.items():
             value = start[name]
             if rospy.has_param("/" + name):
@@ -116,7 +144,8 @@ class SimNode:
             self.conditions[name] = value
             rospy.set_param("/" + name, value)
         self._apply_conditions()
-        self.battery_written = self.conditions["drone_battery"]
+        self.battery_written = self.start_battery = self.conditions["drone_battery"]
+        self.rejected.clear()
 
     def _checked_condition(self, name, raw, fallback):
         try:
@@ -157,6 +186,9 @@ class SimNode:
         self.pub_stats = pub("sim_stats", String, 1, latch=True)
         self.pub_tf = pub("/tf", TFMessage)  # (tf2_ros.TransformBroadcaster's publisher is a queued one)
         self.static_tf = tf2_ros.StaticTransformBroadcaster()
+
+    def _announce_world(self):
+        """The world's fixed transforms (latched) and its camera's calibration."""
         camera_position, _ = self.sim.camera_pose_in_body()
         pad_offset = self.sim.pad_offset_in_vehicle()
         self.static_tf.sendTransform([
@@ -175,10 +207,66 @@ class SimNode:
         rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
         rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
         rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
-        rospy.Subscriber("mujoco_sim/start", Empty, lambda _: self.started.set(), queue_size=1)
+        rospy.Subscriber("mujoco_sim/start", Empty, self._on_start, queue_size=1)
         rospy.Subscriber("mujoco_sim/fault", String, self._on_fault, queue_size=10)
-        if self.lockstep is not None:
-            rospy.Subscriber("lockstep_ack", LockstepAck, self._on_lockstep_ack, queue_size=100, tcp_nodelay=True)
+        self._listen_to_acknowledgements()
+
+    def _listen_to_acknowledgements(self):
+        """Subscribe to lockstep_ack while the gate is enabled (the acknowledging nodes publish at their rate)."""
+        if self.lockstep is not None and self.lockstep_subscriber is None:
+            self.lockstep_subscriber = rospy.Subscriber("lockstep_ack", LockstepAck, self._on_lockstep_ack,
+                                                        queue_size=100, tcp_nodelay=True)
+        elif self.lockstep is None and self.lockstep_subscriber is not None:
+            self.lockstep_subscriber.unregister()
+            self.lockstep_subscriber = None
+
+    def _on_start(self, _msg):
+        self.start_received = True
+        self.wake.set()
+
+    def _on_reset_world(self, _request):
+        """~reset_world (std_srvs/Trigger): served by the loop between two physics steps; the caller waits."""
+        request = {"done": threading.Event(), "success": False, "message": ""}
+        self.reset_requests.put(request)
+        self.wake.set()
+        if not request["done"].wait(RESET_TIMEOUT_S):
+            return TriggerResponse(success=False, message="the simulator's loop did not take the reset within %.0f s "
+                                                          "(wall); see its log" % RESET_TIMEOUT_S)
+        return TriggerResponse(success=request["success"], message=request["message"])
+
+    def _serve_reset_requests(self):
+        """Reset the world for every pending reset_world request (one reset serves them all)."""
+        requests = []
+        while not self.reset_requests.empty():
+            requests.append(self.reset_requests.get())
+        if not requests:
+            return
+        try:
+            success, message = True, self._reset_world()
+        except ConfigError as err:
+            success, message = False, "the world was not reset (it goes on as it was): %s" % err
+            rospy.logerr(message)
+        for request in requests:
+            request.update(success=success, message=message)
+            request["done"].set()
+
+    def _reset_world(self):
+        """Rebuild the world from the parameters as they are now, as a fresh start would; ROS time goes on from
+        here. With wait_for_start the physics is then held for the next start signal. Returns what was done."""
+        model_file, viewer, wait_for_start, cfg = self._read_parameters()  # a bad one raises: nothing changes
+        origin = self._now()
+        self.sim.close()
+        self.model_file, self.viewer_requested, self.wait_for_start, self.cfg = model_file, viewer, wait_for_start, cfg
+        self.time_origin = origin
+        self.start_received = False
+        self._build_world()
+        self._announce_world()
+        self._listen_to_acknowledgements()
+        message = "world reset: seed %d, vehicle %s, realism %s; its time 0 is ROS time %.3f s%s" % (
+            cfg["seed"], cfg["vehicle"], cfg["realism"]["profile"], origin,
+            ", held until mujoco_sim/start" if wait_for_start else "")
+        rospy.loginfo(message)
+        return message
 
     def _on_lockstep_ack(self, msg):
         # An acknowledgement holds the physics: only a node's own, about a time that has been, with a sane period.
@@ -188,10 +276,11 @@ class SimNode:
             problem = ("malformed", "node %r acknowledged as %r" % (sender, msg.node[:60]))
         elif not 0.0 <= period <= 10.0:
             problem = ("out of range", "period %.3g s outside 0..10 s" % period)
-        elif stamp > self.sim.time + 1.0:
-            problem = ("stamp from the future", "stamp %.3f s, sim time %.3f s" % (stamp, self.sim.time))
+        elif stamp > self._now() + 1.0:
+            problem = ("stamp from the future", "stamp %.3f s, sim time %.3f s" % (stamp, self._now()))
         else:
-            return self.lockstep.acknowledge(msg.node, msg.input, stamp, period)
+            gate = self.lockstep  # (None once a reset has disabled it, until this subscriber is gone)
+            return gate.acknowledge(msg.node, msg.input, stamp, period) if gate is not None else None
         self.rejections.reject("lockstep_ack", problem)
 
     def _on_cmd_vel(self, msg):
@@ -224,58 +313,74 @@ class SimNode:
 
     # ----- loop ----------------------------------------------------------------------------------
     def _wait_for_start_signal(self):
-        rospy.loginfo("waiting for std_msgs/Empty on mujoco_sim/start before stepping the physics")
-        # Hold the clock at 1 ms, not 0: nodes such as rosbag record wait for a non-zero time before
-        # they subscribe. The first physics step is 4 ms, so time never runs backwards.
-        waiting_clock = Clock(clock=rospy.Time.from_sec(self.sim.time + 0.001))
-        while self.wait_for_start and not self.started.is_set() and not rospy.is_shutdown():
+        """Hold the physics until the start signal (with wait_for_start), or a reset_world request."""
+        if self.wait_for_start and not self.start_received:
+            rospy.loginfo("waiting for std_msgs/Empty on mujoco_sim/start before stepping the physics")
+        # Hold the clock 1 ms past the world's time 0, not at 0: nodes such as rosbag record wait for a non-zero
+        # time before they subscribe. The first physics step is 4 ms, so time never runs backwards.
+        waiting_clock = Clock(clock=rospy.Time.from_sec(self._now() + 0.001))
+        while self.wait_for_start and not self.start_received and self.reset_requests.empty() and \
+                not rospy.is_shutdown():
             self.pub_clock.publish(waiting_clock)
-            self.started.wait(0.1)
+            self.wake.wait(0.1)
+            self.wake.clear()
 
     def spin(self, max_sim_time=None):
         # (a stop that closes the publishers mid-publish printed a traceback at one stop in three)
         try:
             with ended_by_shutdown():
-                if self.cfg["camera"]["enabled"]:
-                    # Now that the node is in the graph, while the rest of the graph starts (not at the first
-                    # frame of the flight, nor before this node has advertised its topics).
-                    self.sim.open_camera()
-                self._wait_for_start_signal()
-                self._step_and_publish(max_sim_time)
+                while not rospy.is_shutdown():
+                    if self.cfg["camera"]["enabled"]:
+                        # Now that the node is in the graph, while the rest of the graph starts (not at the first
+                        # frame of the flight, nor before this node has advertised its topics).
+                        self.sim.open_camera()
+                    self._wait_for_start_signal()
+                    if self.reset_requests.empty() and not self._step_and_publish(max_sim_time):
+                        break
+                    self._serve_reset_requests()
         finally:
             self.sim.close()
 
     def _step_and_publish(self, max_sim_time):
+        """Step and publish until rospy shuts down or sim time reaches ``max_sim_time`` (False), or a reset_world
+        request comes (True)."""
         rtf = self.cfg["real_time_factor"]
         wall_start, sim_start = time.monotonic(), self.sim.time
         viewer = self._open_viewer() if self.viewer_requested else None
         rospy.loginfo("simulating %s (seed %d) at %s", self.model_file, self.cfg["seed"],
                       "%gx real time" % rtf if rtf > 0 else "full speed")
         self.wall_start, self.sim_start = wall_start, sim_start
-        while not rospy.is_shutdown():
-            while not self.actions.empty():
-                self.actions.get()()
-            if self.lockstep is not None:
-                self._wait_for_lagging_nodes()
-            t0 = time.perf_counter()
-            self.sim.step()
-            t1 = time.perf_counter()
-            self.timing["physics"] += t1 - t0
-            self._publish_due(self.sim.time)
-            self.timing["publish"] += time.perf_counter() - t1
-            if rtf > 0:
-                ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
-                if ahead > 0.002:
-                    time.sleep(ahead)
-                    self.timing["pacing"] += ahead
-            if viewer is not None and self.schedules.setdefault("viewer", Schedule(30.0)).due(self.sim.time):
-                viewer.sync()
-            if max_sim_time is not None and self.sim.time >= max_sim_time:
-                break
+        try:
+            while not rospy.is_shutdown():
+                if not self.reset_requests.empty():
+                    return True
+                while not self.actions.empty():
+                    self.actions.get()()
+                if self.lockstep is not None:
+                    self._wait_for_lagging_nodes()
+                t0 = time.perf_counter()
+                self.sim.step()
+                t1 = time.perf_counter()
+                self.timing["physics"] += t1 - t0
+                self._publish_due(self.sim.time)
+                self.timing["publish"] += time.perf_counter() - t1
+                if rtf > 0:
+                    ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
+                    if ahead > 0.002:
+                        time.sleep(ahead)
+                        self.timing["pacing"] += ahead
+                if viewer is not None and self.schedules.setdefault("viewer", Schedule(30.0)).due(self.sim.time):
+                    viewer.sync()
+                if max_sim_time is not None and self.sim.time >= max_sim_time:
+                    return False
+            return False
+        finally:
+            if viewer is not None:
+                viewer.close()
 
     def _wait_for_lagging_nodes(self):
         """Lock-step: hold sim time while a node that acknowledges its work lags too far behind."""
-        next_time = self.sim.time + self.sim.dt
+        next_time = self._now() + self.sim.dt
         blocker = self.lockstep.blocker(next_time, time.monotonic())
         if blocker is None:
             return
@@ -296,7 +401,7 @@ class SimNode:
 
     def _publish_due(self, t):
         due = {name: s.due(t) for name, s in self.schedules.items()}
-        stamp = rospy.Time.from_sec(t)
+        stamp = rospy.Time.from_sec(self.time_origin + t)
         if due["clock"]:
             self.pub_clock.publish(Clock(clock=stamp))
             rospy.rostime._set_rostime(stamp)  # this node is the clock: it does not listen to /clock
@@ -342,7 +447,7 @@ class SimNode:
 
     def _published(self, publisher, stamp):
         if self.lockstep is not None:
-            self.lockstep.published(publisher.resolved_name, stamp.to_sec(), self.sim.time)
+            self.lockstep.published(publisher.resolved_name, stamp.to_sec(), self._now())
 
     def _send(self, link, message, publisher):
         """Publish ``message`` once ``link`` delivers it (None: nothing was measured, e.g. a GPS dropout; a
@@ -530,7 +635,7 @@ class SimNode:
             self._transform("world", "summit_xl/base_link", (x, y, 0.0), _yaw_quaternion(yaw), stamp)]))
 
     def _publish_touchdown(self, touchdown):
-        msg = Touchdown(header=self._header(rospy.Time.from_sec(touchdown.time), "world"), surface=touchdown.surface,
+        msg = Touchdown(header=self._header(rospy.Time.from_sec(self.time_origin + touchdown.time), "world"), surface=touchdown.surface,
                         crashed=touchdown.crashed, impact_speed=touchdown.impact_speed, tilt_deg=touchdown.tilt_deg,
                         pad_error=touchdown.pad_error)
         _fill_vector(msg.position, touchdown.position)
@@ -540,7 +645,7 @@ class SimNode:
     def _publish_stats(self):
         wall = time.monotonic() - self.wall_start
         sim_elapsed = self.sim.time - self.sim_start
-        stats = {"sim_time": round(self.sim.time, 3), "wall_time": round(wall, 3),
+        stats = {"sim_time": round(self._now(), 3), "wall_time": round(wall, 3),
                  "real_time_factor": round(sim_elapsed / wall, 3) if wall > 0 else 0.0}
         stats.update({"%s_share" % k: round(v / wall, 3) if wall > 0 else 0.0 for k, v in self.timing.items()})
         # The camera thread's CPU beside the loop above (rendering and developing frames; "render" is the time
