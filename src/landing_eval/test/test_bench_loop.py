@@ -5,7 +5,7 @@ import sys
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from landing_eval.bench_loop import cpu_bound, node_cpu_per_sim_second  # noqa: E402
+from landing_eval.bench_loop import cpu_bound, node_cpu_per_sim_second, parallel_gain_bound  # noqa: E402
 
 
 def _sample(sim_s, nodes):
@@ -25,3 +25,8 @@ def test_a_loop_using_most_of_the_cores_is_bound_by_its_cpu():
     assert busy == pytest.approx(1.74) and ceiling == pytest.approx(2 / 0.6)
     assert cpu_bound({}, loop_rtf=2.9, cores=2) == (None, None)
     assert cpu_bound({"sim": 0.3}, loop_rtf=None, cores=2) == (None, None)
+
+
+def test_runs_side_by_side_gain_only_the_cores_one_run_leaves_idle():
+    assert parallel_gain_bound(busy=1.78, cores=2) == pytest.approx(2 / 1.78)
+    assert parallel_gain_bound(busy=0.5, cores=2) == 2.0  # never more than one run a core

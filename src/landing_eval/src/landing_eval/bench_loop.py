@@ -47,6 +47,12 @@ def cpu_bound(cpu_per_sim_second, loop_rtf, cores):
     return total * loop_rtf, cores / total
 
 
+def parallel_gain_bound(busy, cores):
+    """The most ``cores`` runs side by side (benchmark --jobs) can gain in throughput over one at a time, when one
+    run keeps ``busy`` cores busy: only the cores it leaves idle can take more work [x]."""
+    return min(float(cores), cores / busy)
+
+
 def simulator_shares(bag):
     """The simulator's own accounting at the end of the closed-loop run (the last /sim_stats in the bag): the shares
     of its wall time spent in physics, rendering, publishing and waiting for the graph (lock-step), or {}."""
@@ -193,8 +199,9 @@ def report(rows):
     for r in rows:
         busy, ceiling = cpu_bound(r["cpu"], r["loop_rtf"], cores)
         if busy is not None:
-            print("%s: the graph kept %.2f of %d cores busy in flight; its CPU allows at most %.1fx here" % (
-                r["profile"], busy, cores, ceiling))
+            print("%s: the graph kept %.2f of %d cores busy in flight; its CPU allows at most %.1fx here, and %d runs "
+                  "side by side (benchmark --jobs %d) at most %.2fx the throughput of one at a time" % (
+                      r["profile"], busy, cores, ceiling, cores, cores, parallel_gain_bound(busy, cores)))
     for r in rows:
         for node, functions in sorted(r.get("hot", {}).items()):
             print("\npy-spy, %s, %s: own time by function (share of samples)" % (r["profile"], node))
