@@ -5,6 +5,7 @@ What the drone sends (camera frames; navdata with the IMU and sonar; GPS; and th
 stamped when it is measured and published once its link's latency has passed, or never if the link
 loses it (the realism profile, realism.py); the resolved profile is on ~realism_in_force.
 """
+import collections
 import copy
 import json
 import math
@@ -125,6 +126,7 @@ class SimNode:
         self.schedules["vehicle_gps"] = Schedule(self.sim.vehicle_cfg["gps_rate_hz"])
         self.schedules["stats"] = Schedule(0.2)
         self.last_touchdown = None
+        self.delivered_frames = collections.deque()  # (frame future, publish(image)) in delivery order
         self.timing = {"physics": 0.0, "render": 0.0, "publish": 0.0, "pacing": 0.0, "lockstep": 0.0}
 
     def _now(self):
@@ -403,6 +405,7 @@ class SimNode:
         due = {name: s.due(t) for name, s in self.schedules.items()}
         stamp = rospy.Time.from_sec(self.time_origin + t)
         if due["clock"]:
+            self._publish_delivered_frames(wait=True)  # before ROS time moves on
             self.pub_clock.publish(Clock(clock=stamp))
             rospy.rostime._set_rostime(stamp)  # this node is the clock: it does not listen to /clock
         if due["conditions"]:
@@ -433,6 +436,7 @@ class SimNode:
             if link.pending:
                 for publish in link.due(t):
                     publish()
+        self._publish_delivered_frames(wait=False)
         if due["joint_states"] and self.pub_joints.get_num_connections():
             self.pub_joints.publish(JointState(
                 header=self._header(stamp, ""), name=WHEEL_JOINTS,
@@ -516,24 +520,33 @@ class SimNode:
 
     def _capture_camera(self, stamp):
         """Capture the frame now (its capture time is its stamp); it is rendered in the camera's thread and
-        published when the link delivers it (at once without latency: then the physics waits for it)."""
+        published once the link has delivered it and it is developed (_publish_delivered_frames)."""
         t0 = time.perf_counter()
         frame = self.sim.capture_camera()
         self.timing["render"] += time.perf_counter() - t0
         info = copy.copy(self.camera_info)
         info.header = self._header(stamp, self.camera_info.header.frame_id)
 
-        def publish():
-            t0 = time.perf_counter()
-            image = frame.result(timeout=FRAME_TIMEOUT_S)
-            self.timing["render"] += time.perf_counter() - t0
+        def publish(image):
             msg = Image(header=self._header(stamp, "ardrone/bottom_camera"), height=image.shape[0],
                         width=image.shape[1], encoding="rgb8", is_bigendian=0, step=image.shape[1] * 3,
                         data=image.tobytes())
             self.pub_image.publish(msg)
             self._published(self.pub_image, stamp)
             self.pub_info.publish(info)
-        self.sim.camera_link.push(self.sim.time, publish)
+        self.sim.camera_link.push(self.sim.time, lambda: self.delivered_frames.append((frame, publish)))
+
+    def _publish_delivered_frames(self, wait):
+        """Publish the frames the link has delivered, in order, as far as they are developed; with ``wait`` all of
+        them. Called with ``wait`` before every /clock tick: a frame then reaches the nodes while ROS time still
+        reads its delivery time, as if it had been published at once, while the physics stepped on beside its
+        rendering (without latency the frame is delivered at its capture, and used to hold the physics)."""
+        while self.delivered_frames and (wait or self.delivered_frames[0][0].done()):
+            frame, publish = self.delivered_frames.popleft()
+            t0 = time.perf_counter()
+            image = frame.result(timeout=FRAME_TIMEOUT_S)
+            self.timing["render"] += time.perf_counter() - t0
+            publish(image)
 
     def _imu_message(self, stamp):
         quat, gyro, accel = self.sim.imu()
