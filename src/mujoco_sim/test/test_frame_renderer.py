@@ -1,8 +1,11 @@
 """The camera's renderer thread: a frame shows the world of its capture, whatever the physics did since."""
+import concurrent.futures
+import threading
+
 import mujoco
 import numpy as np
 
-from mujoco_sim.frame_renderer import FrameRenderer
+from mujoco_sim.frame_renderer import DeliveredFrames, FrameRenderer
 from test_simulator import airborne, make_sim, run
 
 
@@ -68,3 +71,20 @@ def test_frames_in_flight_come_out_as_rendered_one_by_one():
     finally:
         at_once.close()
         one_by_one.close()
+
+
+def test_delivered_frames_go_out_in_order_as_they_are_ready_and_all_before_time_moves_on():
+    sent = []
+    frames = [concurrent.futures.Future() for _ in range(3)]
+    delivered = DeliveredFrames()
+    for number, frame in enumerate(frames):
+        delivered.add(frame, lambda image, number=number: sent.append((number, image)))
+    frames[1].set_result("second")
+    delivered.publish_ready(wait=False)
+    assert sent == []  # the second is ready, but the first is not: the order holds
+    frames[0].set_result("first")
+    delivered.publish_ready(wait=False)
+    assert sent == [(0, "first"), (1, "second")] and len(delivered) == 1
+    threading.Timer(0.05, frames[2].set_result, ["third"]).start()
+    assert delivered.publish_ready(wait=True) > 0.0  # before a clock tick: waits for the frame still rendering
+    assert sent[-1] == (2, "third") and len(delivered) == 0

@@ -9,6 +9,7 @@ rendering and OpenCV run without Python's GIL. Frames are rendered one at a time
 random draws of the development come in the same order as when every frame was rendered on the spot: the
 images are the same, only when they are computed changes.
 """
+import collections
 import concurrent.futures
 import queue
 import time
@@ -78,3 +79,33 @@ class FrameRenderer:
         if self.renderer is not None:
             self.renderer.close()
             self.renderer = None
+
+
+class DeliveredFrames:
+    """Frames the camera link has delivered, waiting to be published in delivery order as they are developed.
+
+    ``add(frame, publish)`` queues a frame (a Future of its image) and ``publish(image)``, which sends it.
+    ``publish_ready(wait)`` sends, in order, the frames whose image is ready; with ``wait`` all of them, waiting
+    for each. The simulator calls it with ``wait`` before every /clock tick: a frame then reaches the nodes while
+    ROS time still reads its delivery time, as if it had been sent at once. Meanwhile the physics steps on beside
+    its rendering; without latency a frame is delivered at its capture, and used to hold the physics. Returns
+    the seconds spent waiting."""
+
+    def __init__(self):
+        self._frames = collections.deque()
+
+    def __len__(self):
+        return len(self._frames)
+
+    def add(self, frame, publish):
+        self._frames.append((frame, publish))
+
+    def publish_ready(self, wait):
+        waited = 0.0
+        while self._frames and (wait or self._frames[0][0].done()):
+            frame, publish = self._frames.popleft()
+            t0 = time.perf_counter()
+            image = frame.result(timeout=FRAME_TIMEOUT_S)
+            waited += time.perf_counter() - t0
+            publish(image)
+        return waited

@@ -5,7 +5,6 @@ What the drone sends (camera frames; navdata with the IMU and sonar; GPS; and th
 stamped when it is measured and published once its link's latency has passed, or never if the link
 loses it (the realism profile, realism.py); the resolved profile is on ~realism_in_force.
 """
-import collections
 import copy
 import json
 import math
@@ -31,7 +30,7 @@ from tf2_msgs.msg import TFMessage
 
 from .autopilot import FlightMode
 from .config import ConfigError
-from .frame_renderer import FRAME_TIMEOUT_S
+from .frame_renderer import DeliveredFrames
 from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
 from .simulator import SONAR_FIELD_OF_VIEW_RAD, Simulator
@@ -126,7 +125,7 @@ class SimNode:
         self.schedules["vehicle_gps"] = Schedule(self.sim.vehicle_cfg["gps_rate_hz"])
         self.schedules["stats"] = Schedule(0.2)
         self.last_touchdown = None
-        self.delivered_frames = collections.deque()  # (frame future, publish(image)) in delivery order
+        self.delivered_frames = DeliveredFrames()
         self.timing = {"physics": 0.0, "render": 0.0, "publish": 0.0, "pacing": 0.0, "lockstep": 0.0}
 
     def _now(self):
@@ -405,7 +404,7 @@ class SimNode:
         due = {name: s.due(t) for name, s in self.schedules.items()}
         stamp = rospy.Time.from_sec(self.time_origin + t)
         if due["clock"]:
-            self._publish_delivered_frames(wait=True)  # before ROS time moves on
+            self.timing["render"] += self.delivered_frames.publish_ready(wait=True)  # before ROS time moves on
             self.pub_clock.publish(Clock(clock=stamp))
             rospy.rostime._set_rostime(stamp)  # this node is the clock: it does not listen to /clock
         if due["conditions"]:
@@ -436,7 +435,7 @@ class SimNode:
             if link.pending:
                 for publish in link.due(t):
                     publish()
-        self._publish_delivered_frames(wait=False)
+        self.timing["render"] += self.delivered_frames.publish_ready(wait=False)
         if due["joint_states"] and self.pub_joints.get_num_connections():
             self.pub_joints.publish(JointState(
                 header=self._header(stamp, ""), name=WHEEL_JOINTS,
@@ -520,7 +519,7 @@ class SimNode:
 
     def _capture_camera(self, stamp):
         """Capture the frame now (its capture time is its stamp); it is rendered in the camera's thread and
-        published once the link has delivered it and it is developed (_publish_delivered_frames)."""
+        published once the link has delivered it and it is developed (DeliveredFrames)."""
         t0 = time.perf_counter()
         frame = self.sim.capture_camera()
         self.timing["render"] += time.perf_counter() - t0
@@ -534,19 +533,7 @@ class SimNode:
             self.pub_image.publish(msg)
             self._published(self.pub_image, stamp)
             self.pub_info.publish(info)
-        self.sim.camera_link.push(self.sim.time, lambda: self.delivered_frames.append((frame, publish)))
-
-    def _publish_delivered_frames(self, wait):
-        """Publish the frames the link has delivered, in order, as far as they are developed; with ``wait`` all of
-        them. Called with ``wait`` before every /clock tick: a frame then reaches the nodes while ROS time still
-        reads its delivery time, as if it had been published at once, while the physics stepped on beside its
-        rendering (without latency the frame is delivered at its capture, and used to hold the physics)."""
-        while self.delivered_frames and (wait or self.delivered_frames[0][0].done()):
-            frame, publish = self.delivered_frames.popleft()
-            t0 = time.perf_counter()
-            image = frame.result(timeout=FRAME_TIMEOUT_S)
-            self.timing["render"] += time.perf_counter() - t0
-            publish(image)
+        self.sim.camera_link.push(self.sim.time, lambda: self.delivered_frames.add(frame, publish))
 
     def _imu_message(self, stamp):
         quat, gyro, accel = self.sim.imu()
