@@ -120,15 +120,20 @@ class ResetWorldTest(unittest.TestCase):
         self.assertTrue(self.reset().success)
         self.assertSameFlight(self.fly(), self.first_flight)
 
-    def test_4_a_bad_parameter_leaves_the_world_as_it_was(self):
-        rospy.set_param("/mujoco_sim/rates/clock_hz", -1.0)
-        try:
-            response = self.reset()
-        finally:
-            rospy.set_param("/mujoco_sim/rates/clock_hz", 60.0)
-        self.assertFalse(response.success)
-        self.assertIn("clock_hz", response.message)
-        self.assertIn("not reset", response.message)
+    def test_4_a_bad_parameter_or_model_leaves_the_world_as_it_was(self):
+        model_file = rospy.get_param("/mujoco_sim/model_file")
+        for name, value, named in (("rates/clock_hz", -1.0, "clock_hz"),
+                                   ("model_file", "/nonexistent/world.xml", "/nonexistent/world.xml: model file not found")):
+            original = rospy.get_param("/mujoco_sim/" + name)
+            rospy.set_param("/mujoco_sim/" + name, value)
+            try:
+                response = self.reset()
+            finally:
+                rospy.set_param("/mujoco_sim/" + name, original)
+            self.assertFalse(response.success)
+            self.assertIn("not reset", response.message)
+            self.assertIn(named, response.message)
+        self.assertEqual(rospy.get_param("/mujoco_sim/model_file"), model_file)
         self.assertSameFlight(self.fly(), self.first_flight)
 
 

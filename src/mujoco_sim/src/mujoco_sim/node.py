@@ -103,9 +103,10 @@ class SimNode:
         return model_file, viewer, wait_for_start, validate_sim_config(
             private, "sim_node private parameters (%s)" % rospy.get_name())
 
-    def _build_world(self):
-        """The world of the parameters in force, at its time 0: what a fresh start builds."""
-        self.sim = Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
+    def _build_world(self, sim=None):
+        """The world of the parameters in force (``sim``, or a Simulator of them), at its time 0: what a fresh start
+        builds."""
+        self.sim = sim or Simulator(self.cfg, self.model_file, self.cfg["vehicle"], self.cfg["seed"])
         self.actions = queue.SimpleQueue()
         lockstep = self.cfg["lockstep"]
         self.lockstep = LockstepGate(lockstep["max_lead_s"], lockstep["stale_after_wall_s"], log=rospy.loginfo) \
@@ -235,18 +236,22 @@ class SimNode:
                                                           "(wall); see its log" % RESET_TIMEOUT_S)
         return TriggerResponse(success=request["success"], message=request["message"])
 
-    def _serve_reset_requests(self):
-        """Reset the world for every pending reset_world request (one reset serves them all)."""
+    def _serve_reset_requests(self, stopping=False):
+        """Reset the world for every pending reset_world request (one reset serves them all); refuse them when the
+        node is ``stopping``."""
         requests = []
         while not self.reset_requests.empty():
             requests.append(self.reset_requests.get())
         if not requests:
             return
-        try:
-            success, message = True, self._reset_world()
-        except ConfigError as err:
-            success, message = False, "the world was not reset (it goes on as it was): %s" % err
-            rospy.logerr(message)
+        if stopping:
+            success, message = False, "the world was not reset: the simulator is stopping"
+        else:
+            try:
+                success, message = True, self._reset_world()
+            except ConfigError as err:
+                success, message = False, "the world was not reset (it goes on as it was): %s" % err
+                rospy.logerr(message)
         for request in requests:
             request.update(success=success, message=message)
             request["done"].set()
@@ -254,13 +259,15 @@ class SimNode:
     def _reset_world(self):
         """Rebuild the world from the parameters as they are now, as a fresh start would; ROS time goes on from
         here. With wait_for_start the physics is then held for the next start signal. Returns what was done."""
-        model_file, viewer, wait_for_start, cfg = self._read_parameters()  # a bad one raises: nothing changes
+        # A bad parameter or model file raises here, before anything has changed.
+        model_file, viewer, wait_for_start, cfg = self._read_parameters()
+        sim = Simulator(cfg, model_file, cfg["vehicle"], cfg["seed"])
         origin = self._now()
         self.sim.close()
         self.model_file, self.viewer_requested, self.wait_for_start, self.cfg = model_file, viewer, wait_for_start, cfg
         self.time_origin = origin
         self.start_received = False
-        self._build_world()
+        self._build_world(sim)
         self._announce_world()
         self._listen_to_acknowledgements()
         message = "world reset: seed %d, vehicle %s, realism %s; its time 0 is ROS time %.3f s%s" % (
@@ -341,6 +348,7 @@ class SimNode:
                     self._serve_reset_requests()
         finally:
             self.sim.close()
+            self._serve_reset_requests(stopping=True)
 
     def _step_and_publish(self, max_sim_time):
         """Step and publish until rospy shuts down or sim time reaches ``max_sim_time`` (False), or a reset_world
