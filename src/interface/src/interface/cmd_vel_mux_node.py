@@ -11,7 +11,7 @@ import rospy
 from geometry_msgs.msg import Twist
 from landing_msgs.input_check import MAX_RATE_RADPS, MAX_SPEED_MPS, RosRejectionLog, numbers_problem
 from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import direct_publisher, run_node, spin_at
+from landing_msgs.rospy_node import NodeHandles, direct_publisher, run_node
 from std_msgs.msg import String
 
 from .cmd_vel_mux import ALLOWED, CommandSelector
@@ -32,11 +32,12 @@ class MuxNode:
         self.selector = CommandSelector(_positive_param("input_timeout_s", 0.5))
         self.selected = None
         self.rejections = RosRejectionLog()
+        self.handles = NodeHandles()
         self.pub = direct_publisher("ardrone/cmd_vel", Twist)
         self.pub_selected = rospy.Publisher("cmd_vel_mux/selected", String, queue_size=1, latch=True)
         for name, topic in TOPICS.items():
-            rospy.Subscriber(topic, Twist, self._input(name), queue_size=1)
-        rospy.Subscriber("supervisor/mode", String, self._on_mode, queue_size=5)
+            self.handles.subscriber(topic, Twist, self._input(name), queue_size=1)
+        self.handles.subscriber("supervisor/mode", String, self._on_mode, queue_size=5)
         self.pub_selected.publish(String(data="none"))
         self.lockstep = LockstepAcker(period=1.0 / self.rate_hz)
 
@@ -69,12 +70,8 @@ class MuxNode:
             self.pub.publish(choice[1])
         self.lockstep.ack(now)
 
-    def spin(self):
-        spin_at(self.rate_hz, self.tick)
-
-
 def main():
-    return run_node("cmd_vel_mux", MuxNode, startup_errors=(ValueError,))
+    return run_node("cmd_vel_mux", MuxNode, startup_errors=(ValueError,), resettable=True)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, RosRejecti
                                       frame_problem, numbers_problem, stamp_problem)
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
-from landing_msgs.rospy_node import direct_publisher, run_node, spin_at
+from landing_msgs.rospy_node import NodeHandles, direct_publisher, run_node
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 from std_msgs.msg import Empty, String
@@ -64,31 +64,32 @@ class EmergencyNode:
         self.lockstep = LockstepAcker(period=1.0 / self.rate_hz)
 
         self.rejections = RosRejectionLog()
+        self.handles = NodeHandles()
         checked = self._checked
-        rospy.Subscriber("supervisor/mode", String, checked(
+        self.handles.subscriber("supervisor/mode", String, checked(
             "supervisor/mode", lambda m: choice_problem(m.data, MODES, "mode"),
             lambda m: self.pending.append(("mode", m.data))), queue_size=5)
-        rospy.Subscriber("operator/command", String, checked(
+        self.handles.subscriber("operator/command", String, checked(
             "operator/command", lambda m: choice_problem(m.data.strip().lower(), OPERATOR_COMMANDS, "command"),
             self._on_operator), queue_size=10)
         position_problem = lambda m: _header_problem(m, WORLD_FRAME) or numbers_problem(  # noqa: E731
             MAX_POSITION_M, position=(m.pose.pose.position.x, m.pose.pose.position.y))
-        rospy.Subscriber("ardrone/odom_estimate", Odometry, checked(
+        self.handles.subscriber("ardrone/odom_estimate", Odometry, checked(
             "ardrone/odom_estimate", position_problem, self._estimate("odom_estimate")), queue_size=1)
-        rospy.Subscriber("ardrone/gps/odom", Odometry, checked(
+        self.handles.subscriber("ardrone/gps/odom", Odometry, checked(
             "ardrone/gps/odom", position_problem, self._estimate("gps")), queue_size=1)
-        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, checked(
+        self.handles.subscriber("platform/current_platform_position_in_ardrone", PointStamped, checked(
             "platform/current_platform_position_in_ardrone",
             lambda m: _header_problem(m, BODY_FRAME) or numbers_problem(MAX_ALTITUDE_M, point=(m.point.x, m.point.y)),
             lambda m: self.core.on_pad(rospy.get_time(), m.point.x, m.point.y)), queue_size=1)
-        rospy.Subscriber("ardrone/altimeter", Altimeter, checked(
+        self.handles.subscriber("ardrone/altimeter", Altimeter, checked(
             "ardrone/altimeter", lambda m: _header_problem(m) or numbers_problem(MAX_ALTITUDE_M, altitude=m.altitude),
             lambda m: self.core.on_altitude(rospy.get_time(), m.altitude)), queue_size=1)
-        rospy.Subscriber("ardrone/sonar_height", Range, checked(
+        self.handles.subscriber("ardrone/sonar_height", Range, checked(
             "ardrone/sonar_height", lambda m: _header_problem(m, BODY_FRAME) or (
                 ("out of range", "range is %s" % m.range) if not m.range >= 0.0 else None),  # +inf: no echo
             lambda m: self.core.on_sonar(rospy.get_time(), m.range)), queue_size=1)
-        rospy.Subscriber("ardrone/navdata", Navdata, checked(
+        self.handles.subscriber("ardrone/navdata", Navdata, checked(
             "ardrone/navdata", lambda m: choice_problem(m.state, NAVDATA_STATES, "state") or _header_problem(m),
             lambda m: self.core.on_flight(rospy.get_time(), flight_from_navdata(m.state))), queue_size=1)
 
@@ -158,12 +159,8 @@ class EmergencyNode:
             self.pub_state.publish(String(data=out.phase.value))
             self.state_sent = out.phase
 
-    def spin(self):
-        spin_at(self.rate_hz, self.tick)
-
-
 def main():
-    return run_node("emergency", EmergencyNode, startup_errors=(SettingsError,))
+    return run_node("emergency", EmergencyNode, startup_errors=(SettingsError,), resettable=True)
 
 
 if __name__ == "__main__":

@@ -11,6 +11,9 @@ parameters and whose ``tick()`` runs at its rate:
     def main():
         return run_node("name", NodeClass, startup_errors=(SettingsError,))   # NodeClass.spin: spin_at(rate, tick)
 
+A class that also has ``rate_hz``, and makes its subscribers and services through ``NodeHandles``, can be
+reset: ``run_node(..., resettable=True)`` offers ``~reset`` (ResettableNode).
+
 - Signals: rospy's handler can deadlock mid-publish (see landing_msgs.shutdown); here a signal starts a
   thread that shuts rospy down.
 - Accept backlog: rospy's TCPROS server listens with a backlog of 5 and accepts in one thread. When a
@@ -122,12 +125,13 @@ def ended_by_shutdown():
             raise
 
 
-def spin_at(rate_hz, tick):
-    """Call ``tick()`` at ``rate_hz`` of ROS time (sim time under /use_sim_time) until rospy shuts down; not
-    before the clock runs (a scenario holds the physics at first). A jump back in time is logged, not fatal."""
+def spin_at(rate_hz, tick, until=lambda: False):
+    """Call ``tick()`` at ``rate_hz`` of ROS time (sim time under /use_sim_time) until rospy shuts down or
+    ``until()`` is true; not before the clock runs (a scenario holds the physics at first). A jump back in time is
+    logged, not fatal."""
     rate = rospy.Rate(rate_hz)
     with ended_by_shutdown():
-        while not rospy.is_shutdown():
+        while not rospy.is_shutdown() and not until():
             if rospy.get_time() > 0.0:
                 tick()
             try:
@@ -138,17 +142,86 @@ def spin_at(rate_hz, tick):
                 break
 
 
-def run_node(name, make_node, startup_errors):
-    """main() of a node: init_node(name), ``node = make_node()``, ``node.spin()``; returns the exit status. A
-    startup error (one of ``startup_errors``: a missing or bad parameter) is logged as fatal and gives 2."""
+def run_node(name, make_node, startup_errors, resettable=False):
+    """main() of a node: init_node(name), ``node = make_node()``, ``node.spin()`` (with ``resettable``: behind
+    ~reset, ResettableNode); returns the exit status. A startup error (one of ``startup_errors``: a missing or bad
+    parameter) is logged as fatal and gives 2."""
     init_node(name)
     try:
         node = make_node()
     except startup_errors as err:
         rospy.logfatal(str(err))
         return 2
-    node.spin()
+    if resettable:
+        ResettableNode(node, make_node, startup_errors).spin()
+    else:
+        node.spin()
     return 0
+
+
+class NodeHandles:
+    """The subscribers and services one node object makes, so that a reset can let go of them. (Its publishers
+    need not be let go: the next node object's publishers on the same topics share their connections.)"""
+
+    def __init__(self):
+        self._subscribers, self._services = [], []
+
+    def subscriber(self, *args, **kwargs):
+        self._subscribers.append(rospy.Subscriber(*args, **kwargs))
+        return self._subscribers[-1]
+
+    def service(self, *args, **kwargs):
+        self._services.append(rospy.Service(*args, **kwargs))
+        return self._services[-1]
+
+    def close(self):
+        for subscriber in self._subscribers:
+            subscriber.unregister()
+        for service in self._services:
+            service.shutdown("reset")
+        self._subscribers, self._services = [], []
+
+
+class ResettableNode:
+    """A timer-driven node object (``tick()`` at ``rate_hz``, subscribers and services made through ``handles``, a
+    NodeHandles) behind ``~reset`` (std_srvs/Trigger). A reset builds a new object from the parameters as they are
+    then (``make_node``), as a fresh start does, and lets the old one go; a startup error refuses it, and the old
+    object goes on. The new object is built before the old one lets go of its subscriptions: rospy gives the new
+    subscribers the connections that exist, and hands each the last latched message of each connection at once,
+    as a fresh node would get it on connecting. Ticks and resets take turns (a lock): a tick runs whole on one
+    object."""
+
+    def __init__(self, node, make_node, startup_errors):
+        from std_srvs.srv import Trigger
+        self.node, self.make_node, self.startup_errors = node, make_node, startup_errors
+        self.lock = threading.Lock()
+        self.generation = 0
+        self.service = rospy.Service("~reset", Trigger, self._on_reset)
+
+    def _on_reset(self, _request):
+        from std_srvs.srv import TriggerResponse
+        with self.lock:
+            try:
+                node = self.make_node()
+            except self.startup_errors as err:
+                message = "%s not reset (it goes on as it was): %s" % (rospy.get_name(), err)
+                rospy.logerr(message)
+                return TriggerResponse(success=False, message=message)
+            old, self.node = self.node, node
+            self.generation += 1
+        old.handles.close()
+        rospy.loginfo("%s reset", rospy.get_name())
+        return TriggerResponse(success=True, message="%s reset" % rospy.get_name())
+
+    def _tick(self):
+        with self.lock:
+            self.node.tick()
+
+    def spin(self):
+        """spin_at the present object's rate; after a reset, at the new object's from its next tick on."""
+        while not rospy.is_shutdown():
+            generation = self.generation
+            spin_at(self.node.rate_hz, self._tick, until=lambda: self.generation != generation)
 
 
 def exit_promptly(status=0):
