@@ -11,7 +11,7 @@ parameters and whose ``tick()`` runs at its rate:
     def main():
         return run_node("name", NodeClass, startup_errors=(SettingsError,))   # NodeClass.spin: spin_at(rate, tick)
 
-A class that also has ``rate_hz``, and makes its subscribers and services through ``NodeHandles``, can be
+A class that also has ``rate_hz``, and makes its subscribers through ``NodeHandles``, can be
 reset: ``run_node(..., resettable=True)`` offers ``~reset`` (ResettableNode).
 
 - Signals: rospy's handler can deadlock mid-publish (see landing_msgs.shutdown); here a signal starts a
@@ -160,31 +160,27 @@ def run_node(name, make_node, startup_errors, resettable=False):
 
 
 class NodeHandles:
-    """The subscribers and services one node object makes, so that a reset can let go of them. (Its publishers
-    need not be let go: the next node object's publishers on the same topics share their connections.)"""
+    """The subscribers one node object makes, so that a reset can let go of them. (Its publishers need not be let
+    go: the next node object's publishers on the same topics share their connections. A node with services of its
+    own needs more: rospy refuses a service name twice, so they would have to go before the next object makes
+    them; docs/warm_graph.md.)"""
 
     def __init__(self):
-        self._subscribers, self._services = [], []
+        self._subscribers = []
 
     def subscriber(self, *args, **kwargs):
         self._subscribers.append(rospy.Subscriber(*args, **kwargs))
         return self._subscribers[-1]
 
-    def service(self, *args, **kwargs):
-        self._services.append(rospy.Service(*args, **kwargs))
-        return self._services[-1]
-
     def close(self):
         for subscriber in self._subscribers:
             subscriber.unregister()
-        for service in self._services:
-            service.shutdown("reset")
-        self._subscribers, self._services = [], []
+        self._subscribers = []
 
 
 class ResettableNode:
-    """A timer-driven node object (``tick()`` at ``rate_hz``, subscribers and services made through ``handles``, a
-    NodeHandles) behind ``~reset`` (std_srvs/Trigger). A reset builds a new object from the parameters as they are
+    """A timer-driven node object (``tick()`` at ``rate_hz``, subscribers made through ``handles``, a NodeHandles)
+    behind ``~reset`` (std_srvs/Trigger). A reset builds a new object from the parameters as they are
     then (``make_node``), as a fresh start does, and lets the old one go; a startup error refuses it, and the old
     object goes on. The new object is built before the old one lets go of its subscriptions: rospy gives the new
     subscribers the connections that exist, and hands each the last latched message of each connection at once,
