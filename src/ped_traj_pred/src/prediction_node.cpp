@@ -286,7 +286,8 @@ void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& t
       ROS_INFO("Pad track started from %s at t = %.3f s", topic.c_str(), stamp.toSec());
       break;
     case MeasurementOutcome::kReinitialised:
-      ROS_WARN("Pad track restarted from %s at t = %.3f s: %d fixes in a row outside the gate",
+      // Throttled: garbage fixes (the fuzz scenario) restarted the track 4 times in a second.
+      ROS_WARN_THROTTLE(5.0, "Pad track restarted from %s at t = %.3f s: %d fixes in a row outside the gate",
                topic.c_str(), stamp.toSec(), filter_.parameters().max_consecutive_rejections);
       break;
     case MeasurementOutcome::kRejected:
