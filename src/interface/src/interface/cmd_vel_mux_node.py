@@ -34,7 +34,8 @@ class MuxNode:
         self.rejections = RosRejectionLog()
         self.handles = NodeHandles()
         self.pub = direct_publisher("ardrone/cmd_vel", Twist)
-        self.pub_selected = rospy.Publisher("cmd_vel_mux/selected", String, queue_size=1, latch=True)
+        self.pub_selected = self.handles.latched(
+            rospy.Publisher("cmd_vel_mux/selected", String, queue_size=1, latch=True))
         for name, topic in TOPICS.items():
             self.handles.subscriber(topic, Twist, self._input(name), queue_size=1)
         self.handles.subscriber("supervisor/mode", String, self._on_mode, queue_size=5)

@@ -58,13 +58,13 @@ class EmergencyNode:
         self.pub_cmd = direct_publisher("emergency/cmd_vel", Twist)
         self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
         self.pub_position = rospy.Publisher("emergency/position", PositionXYCommand, queue_size=5)
-        self.pub_state = rospy.Publisher("emergency/state", String, queue_size=1, latch=True)
+        self.handles = NodeHandles()
+        self.pub_state = self.handles.latched(rospy.Publisher("emergency/state", String, queue_size=1, latch=True))
         self.pub_state.publish(String(data=Phase.INACTIVE.value))
         self.state_sent = Phase.INACTIVE
         self.lockstep = LockstepAcker(period=1.0 / self.rate_hz)
 
         self.rejections = RosRejectionLog()
-        self.handles = NodeHandles()
         checked = self._checked
         self.handles.subscriber("supervisor/mode", String, checked(
             "supervisor/mode", lambda m: choice_problem(m.data, MODES, "mode"),

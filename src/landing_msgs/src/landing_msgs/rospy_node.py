@@ -11,8 +11,9 @@ parameters and whose ``tick()`` runs at its rate:
     def main():
         return run_node("name", NodeClass, startup_errors=(SettingsError,))   # NodeClass.spin: spin_at(rate, tick)
 
-A class that also has ``rate_hz``, and makes its subscribers through ``NodeHandles``, can be
-reset: ``run_node(..., resettable=True)`` offers ``~reset`` (ResettableNode).
+A class that makes its subscribers, latched publishers and services through ``NodeHandles`` can be reset:
+``run_node(..., resettable=True)`` offers ``~reset`` (ResettableNode). A node driven by its callbacks alone has
+no ``tick()``; run_node then only waits for the shutdown.
 
 - Signals: rospy's handler can deadlock mid-publish (see landing_msgs.shutdown); here a signal starts a
   thread that shuts rospy down.
@@ -160,17 +161,58 @@ def run_node(name, make_node, startup_errors, resettable=False):
 
 
 class NodeHandles:
-    """The subscribers one node object makes, so that a reset can let go of them. (Its publishers need not be let
-    go: the next node object's publishers on the same topics share their connections. A node with services of its
-    own needs more: rospy refuses a service name twice, so they would have to go before the next object makes
-    them; docs/warm_graph.md.)"""
+    """What one node object holds in rospy that a reset (ResettableNode) must let go of or hand over:
+    - its subscribers (``subscriber``), unregistered by ``close``;
+    - its latched publishers (``latched``): a fresh node has nothing latched, so the reset drops their latched
+      message (``drop_latches``) before the next object is built, and puts it back if that object fails;
+    - its services (``service``): rospy refuses a service name twice in one process, so the first object's
+      rospy.Service stays and the next object's handler takes it over once that object is in use (``activate``).
+    Plain publishers need nothing: the next object's publishers on the same topics share their connections."""
+
+    _services = {}  # resolved service name -> _HandedOverService, one per process
 
     def __init__(self):
-        self._subscribers = []
+        self._subscribers, self._latched, self._handlers = [], [], []
 
     def subscriber(self, *args, **kwargs):
         self._subscribers.append(rospy.Subscriber(*args, **kwargs))
         return self._subscribers[-1]
+
+    def latched(self, publisher):
+        """``publisher`` (a rospy.Publisher made with latch=True), remembered for drop_latches; returns it."""
+        self._latched.append(publisher)
+        return publisher
+
+    def service(self, name, service_class, handler):
+        """A rospy.Service ``name`` answered by ``handler``: made now for the first object of the process; for a
+        later one, ``handler`` answers from ``activate`` on (until then the object in use answers)."""
+        resolved = rospy.resolve_name(name)
+        shared = NodeHandles._services.get(resolved)
+        if shared is None:
+            shared = NodeHandles._services[resolved] = _HandedOverService(resolved, service_class, handler)
+        elif shared.service_class is not service_class:
+            raise ValueError("service %s was offered as %s and now as %s" % (
+                resolved, shared.service_class._type, service_class._type))
+        self._handlers.append((shared, handler))
+        return shared
+
+    def drop_latches(self):
+        """Forget every latched message (as a fresh node has none); returns what ``restore_latches`` puts back."""
+        dropped = [(publisher.impl, publisher.impl.latch) for publisher in self._latched]
+        for impl, _message in dropped:
+            impl.latch = None
+        return dropped
+
+    @staticmethod
+    def restore_latches(dropped):
+        for impl, message in dropped:
+            if impl.latch is None:  # (the failed object published nothing in its place)
+                impl.latch = message
+
+    def activate(self):
+        """This object's service handlers answer from now on."""
+        for shared, handler in self._handlers:
+            shared.handler = handler
 
     def close(self):
         for subscriber in self._subscribers:
@@ -178,14 +220,25 @@ class NodeHandles:
         self._subscribers = []
 
 
+class _HandedOverService:
+    """One rospy.Service whose answers come from the handler of the node object in use."""
+
+    def __init__(self, name, service_class, handler):
+        self.service_class, self.handler = service_class, handler
+        self.service = rospy.Service(name, service_class, lambda request: self.handler(request))
+
+
 class ResettableNode:
-    """A timer-driven node object (``tick()`` at ``rate_hz``, subscribers made through ``handles``, a NodeHandles)
-    behind ``~reset`` (std_srvs/Trigger). A reset builds a new object from the parameters as they are
-    then (``make_node``), as a fresh start does, and lets the old one go; a startup error refuses it, and the old
-    object goes on. The new object is built before the old one lets go of its subscriptions: rospy gives the new
+    """A node object (its subscribers, latched publishers and services made through ``handles``, a NodeHandles)
+    behind ``~reset`` (std_srvs/Trigger). A timer-driven object has ``tick()`` and ``rate_hz``; an object driven by
+    its callbacks alone has neither. A reset builds a new object from the parameters as they are then
+    (``make_node``), as a fresh start does, and lets the old one go; a startup error refuses it, and the old
+    object goes on. The old object's latched messages are dropped first (a fresh node has none; the new object
+    publishes its own). The new object is built before the old one lets go of its subscriptions: rospy gives the new
     subscribers the connections that exist, and hands each the last latched message of each connection at once,
     as a fresh node would get it on connecting. Ticks and resets take turns (a lock): a tick runs whole on one
-    object."""
+    object. (The old object's callbacks may still run while the new one is built; they touch only the old
+    object.)"""
 
     def __init__(self, node, make_node, startup_errors):
         from std_srvs.srv import Trigger
@@ -197,13 +250,16 @@ class ResettableNode:
     def _on_reset(self, _request):
         from std_srvs.srv import TriggerResponse
         with self.lock:
+            dropped = self.node.handles.drop_latches()
             try:
                 node = self.make_node()
             except self.startup_errors as err:
+                NodeHandles.restore_latches(dropped)
                 message = "%s not reset (it goes on as it was): %s" % (rospy.get_name(), err)
                 rospy.logerr(message)
                 return TriggerResponse(success=False, message=message)
             old, self.node = self.node, node
+            node.handles.activate()
             self.generation += 1
         old.handles.close()
         rospy.loginfo("%s reset", rospy.get_name())
@@ -214,9 +270,13 @@ class ResettableNode:
             self.node.tick()
 
     def spin(self):
-        """spin_at the present object's rate; after a reset, at the new object's from its next tick on."""
+        """spin_at the present object's rate (after a reset, at the new object's from its next tick on); for an
+        object without tick(), until rospy shuts down."""
         while not rospy.is_shutdown():
             generation = self.generation
+            if not hasattr(self.node, "tick"):
+                spin()
+                return
             spin_at(self.node.rate_hz, self._tick, until=lambda: self.generation != generation)
 
 
