@@ -15,6 +15,12 @@ tree, unknown words or states) is dropped with a throttled warning saying what w
 Restarted after a crash (respawn in supervisor.launch), it carries on in the mode it had: its state
 (Supervisor.snapshot) is kept in the private parameter ~recovery on the master, which outlives the
 node, tagged with ~launch_id (unique to each roslaunch, kept across respawns); another launch starts afresh.
+
+``~reset`` (std_srvs/Trigger, between the scenarios of a warm graph) starts afresh from the parameters as they are
+then (the condition parameters read anew from the master): mode idle, nothing latched but what a fresh start
+publishes (no tracker command), the idle take-off timer from the reset on. It does not recover ~recovery, and
+overwrites it with its fresh state at once, so that a crash later in the new scenario carries on in that scenario.
+A bad parameter refuses the reset and the supervisor goes on as it was.
 """
 import json
 import sys
@@ -27,10 +33,11 @@ from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_SPEED_MPS, RosRejectio
 from platform_tracking.state_machine import State as TrackerState
 
 import rospy
+from rospy.impl.paramserver import get_param_server_cache
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Navdata
 from geometry_msgs.msg import PointStamped
-from landing_msgs.rospy_node import run_node, spin_at
+from landing_msgs.rospy_node import NodeHandles, run_node
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger, TriggerResponse
@@ -96,12 +103,23 @@ def _node_params():
 
 
 class SupervisorNode:
-    def __init__(self):
+    """The supervisor from the parameters as they are at construction; ``tick()`` evaluates the conditions at
+    ``rate_hz``. ``carry_on``: the first object of a process carries on from the state a crashed predecessor of the
+    same launch left in ~recovery; an object made by a reset starts afresh."""
+
+    # The object whose state ~recovery keeps: the newest one. One retired by a reset may still answer a command
+    # while its successor takes over, and must not write the previous scenario's state over its successor's.
+    _recovery_owner = None
+    _recovery_lock = threading.Lock()
+
+    def __init__(self, carry_on=False):
         conditions_file, lost_state, settings, self.params = _node_params()
         try:
             self.table = load_table(conditions_file)
         except ConditionTableError as err:
             raise StartupError("supervisor: %s" % err)
+        # Every parameter is valid from here on: nothing below may refuse the reset.
+        self.rate_hz = self.params["rate_hz"]
         self.lock = threading.Lock()
         self.touchdown = TouchdownJudge(self.params["touchdown_detection_age_s"], self.params["touchdown_max_offset_m"])
         self.core = Supervisor(self.table, settings, log=self._log, touchdown_judge=self.touchdown)
@@ -109,8 +127,8 @@ class SupervisorNode:
         self.launch_id = rospy.get_param("~launch_id", None)  # one roslaunch's, kept across respawns
         self.unsent = []  # decisions waiting for the subscribers of supervisor/decisions (_listened_to)
         self.decisions_wait_until = time.monotonic() + DECISIONS_WAIT_S
-        # Before any subscription: an operator command arriving first would save a fresh state over the old one.
-        self._recover()
+        if carry_on:
+            self._recover()
         self.watchdog = SensorWatchdog(SENSOR_TOPICS)
         self.platform = PlatformSpeed(self.params["platform_odom_timeout_s"], self.params["platform_speed_window_s"])
         self.target = TargetLostTimer(lost_state)
@@ -121,32 +139,43 @@ class SupervisorNode:
         self.rejections = RosRejectionLog()
         self.last_command = (None, 0.0)  # (word, sim time) of the latest operator command taken
 
+        self.handles = NodeHandles()
+        latched = self.handles.latched
         self.pub_decisions = rospy.Publisher("supervisor/decisions", String, queue_size=100)
-        self.pub_mode = rospy.Publisher("supervisor/mode", String, queue_size=1, latch=True)
-        self.pub_warning = rospy.Publisher("supervisor/warning", String, queue_size=1, latch=True)
-        self.pub_allowed = rospy.Publisher("landing_allowed", Bool, queue_size=1, latch=True)
-        self.pub_tracker = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
-        self.pub_flight_management = rospy.Publisher("supervisor/flight_management", String, queue_size=1, latch=True)
+        self.pub_mode = latched(rospy.Publisher("supervisor/mode", String, queue_size=1, latch=True))
+        self.pub_warning = latched(rospy.Publisher("supervisor/warning", String, queue_size=1, latch=True))
+        self.pub_allowed = latched(rospy.Publisher("landing_allowed", Bool, queue_size=1, latch=True))
+        self.pub_tracker = latched(rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True))
+        self.pub_flight_management = latched(
+            rospy.Publisher("supervisor/flight_management", String, queue_size=1, latch=True))
 
+        subscriber = self.handles.subscriber
         # AnyMsg: only the arrival matters, nothing is deserialised.
-        self.sensor_subscribers = {name: rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
+        self.sensor_subscribers = {name: subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
                                    for name, topic in SENSOR_TOPICS.items()}
-        rospy.Subscriber("kalman_platform_odom", Odometry, self._on_platform_odom, queue_size=1)
-        rospy.Subscriber("summit_xl/gps/odom", Odometry, self._on_vehicle_gps, queue_size=5)
-        rospy.Subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
-        rospy.Subscriber("ardrone/navdata", Navdata, self._on_navdata, queue_size=1)
-        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, self._on_detection, queue_size=5)
-        rospy.Subscriber("operator/command", String, self._on_operator, queue_size=10)
-        self.services = [rospy.Service("supervisor/" + name, Trigger, self._service(name)) for name in SERVICES]
+        subscriber("kalman_platform_odom", Odometry, self._on_platform_odom, queue_size=1)
+        subscriber("summit_xl/gps/odom", Odometry, self._on_vehicle_gps, queue_size=5)
+        subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
+        subscriber("ardrone/navdata", Navdata, self._on_navdata, queue_size=1)
+        subscriber("platform/current_platform_position_in_ardrone", PointStamped, self._on_detection, queue_size=5)
+        subscriber("operator/command", String, self._on_operator, queue_size=10)
+        for name in SERVICES:
+            self.handles.service("supervisor/" + name, Trigger, self._service(name))
         for name, value in self.params["initial_conditions"].items():
             if not rospy.has_param("/" + name):
                 rospy.set_param("/" + name, value)
                 rospy.loginfo("supervisor: /%s was not set: starting from %g (thesis Flight Management default)",
                               name, value)
-        # Subscribe to every condition parameter now, so the master pushes changes from here on.
+        # Read every condition parameter from the master now (a reset's runner has just set the new scenario's;
+        # the master's push of them may still be on its way) and subscribe to it, so the master pushes changes
+        # from here on.
         for name in self.table.params():
-            self._read_param(name)
+            self._read_param_anew(name)
         self._publish(0.0)  # mode idle, no warning, landing not allowed: known before the clock runs
+        with SupervisorNode._recovery_lock:
+            SupervisorNode._recovery_owner = self
+        if not carry_on:
+            self._save()  # a reset's fresh state replaces the previous scenario's at once
         rospy.loginfo("supervisor: %d conditions from %s; answer timeout %g s, auto take-off after %g s, "
                       "Flag #3 re-checks every %g s x %d", len(self.table), conditions_file,
                       settings.answer_timeout_s, settings.idle_takeoff_s, settings.recheck_interval_s,
@@ -173,15 +202,19 @@ class SupervisorNode:
         rospy.logwarn("supervisor: restarted after a crash; carrying on in mode %s", self.core.mode.value)
 
     def _save(self):
-        """Keep the core's state where a restarted supervisor finds it (only when it changed)."""
+        """Keep the core's state where a restarted supervisor finds it (only when it changed, and only while this
+        object is the newest)."""
         snapshot = self.core.snapshot()
         if snapshot == self.saved_snapshot:
             return
-        try:
-            rospy.set_param("~recovery", json.dumps({"launch_id": self.launch_id, "snapshot": snapshot}))
-            self.saved_snapshot = snapshot
-        except Exception as err:  # the master is gone: the flight goes on, a restart would start afresh
-            rospy.logwarn_throttle(30.0, "supervisor: cannot save its state for a restart: %s" % err)
+        with SupervisorNode._recovery_lock:
+            if SupervisorNode._recovery_owner is not self:
+                return
+            try:
+                rospy.set_param("~recovery", json.dumps({"launch_id": self.launch_id, "snapshot": snapshot}))
+                self.saved_snapshot = snapshot
+            except Exception as err:  # the master is gone: the flight goes on, a restart would start afresh
+                rospy.logwarn_throttle(30.0, "supervisor: cannot save its state for a restart: %s" % err)
 
     def _listened_to(self):
         """Whether supervisor/decisions (not latched) reaches its subscribers. Right after a restart they are still
@@ -285,6 +318,16 @@ class SupervisorNode:
         return accepted, message
 
     @staticmethod
+    def _read_param_anew(name):
+        """The condition parameter /``name`` as the master holds it now, subscribed to: out of rospy's cache
+        first, so that rospy subscribes to it (again), which returns the master's value."""
+        try:
+            get_param_server_cache().delete(rospy.resolve_name("/" + name))
+        except KeyError:  # not cached yet
+            pass
+        return SupervisorNode._read_param(name)
+
+    @staticmethod
     def _read_param(name):
         try:
             # Cached: pushed by the master, no XML-RPC round trip per tick. The simulator's battery mirror
@@ -347,12 +390,11 @@ class SupervisorNode:
             self._save()
         self.lockstep.ack(now)
 
-    def spin(self):
-        spin_at(self.params["rate_hz"], self.tick)
-
 
 def main():
-    return run_node("supervisor", SupervisorNode, startup_errors=(StartupError,))
+    first = iter([True])  # only the process's first object may carry on from a crashed predecessor's state
+    return run_node("supervisor", lambda: SupervisorNode(carry_on=next(first, False)),
+                    startup_errors=(StartupError,), resettable=True)
 
 
 if __name__ == "__main__":
