@@ -1,6 +1,7 @@
 #include "ped_traj_pred/prediction_node.h"
 
 #include <nav_msgs/Path.h>
+#include <ros/names.h>
 #include <tf2/utils.h>
 #include <tf2_geometry_msgs/tf2_geometry_msgs.h>
 
@@ -68,10 +69,7 @@ FilterParameters loadFilterParameters(const ros::NodeHandle& nh)
   p.heading_loss_std = requireParam<double>(nh, "heading_loss_std");
   p.low_speed_regularisation = requireParam<double>(nh, "low_speed_regularisation");
   p.max_integration_step = requireParam<double>(nh, "max_integration_step");
-  const std::string error = p.validate();
-  if (!error.empty())
-    throw ParameterError("invalid parameter: " + nh.resolveName("") + "/" + error);
-  return p;
+  return p;  // validated with the rest (PredictionSettings::validate)
 }
 
 std::string withoutLeadingSlash(const std::string& frame)
@@ -96,55 +94,108 @@ geometry_msgs::Quaternion travelDirection(const Eigen::Vector3d& velocity)
   return yawQuaternion(std::atan2(velocity.y(), velocity.x()));
 }
 
-double requirePositive(const ros::NodeHandle& nh, const std::string& name, const char* unit)
+/// A topic name parameter: empty, or a name roscpp accepts.
+std::string requireTopicParam(const ros::NodeHandle& nh, const std::string& name)
 {
-  const double value = requireParam<double>(nh, name);
-  if (!(std::isfinite(value) && value > 0.0))
-    throw ParameterError("invalid parameter: " + nh.resolveName(name) + " must be > 0 [" + unit + "]");
-  return value;
+  const std::string topic = requireParam<std::string>(nh, name);
+  std::string error;
+  if (!topic.empty() && !ros::names::validate(topic, error))
+    throw ParameterError("invalid parameter: " + nh.resolveName(name) + " = '" + topic + "': " + error);
+  return topic;
 }
 }  // namespace
 
-PredictionNode::PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
-  : filter_(loadFilterParameters(private_nh), requirePositive(private_nh, "fusion_horizon", "s"))
+PredictionSettings loadSettings(const ros::NodeHandle& private_nh)
 {
-  world_frame_ = withoutLeadingSlash(requireParam<std::string>(private_nh, "world_frame"));
-  time_step_ = requireParam<double>(private_nh, "time_step");
-  path_time_ = requireParam<double>(private_nh, "path_time");
-  pub_freq_ = requireParam<double>(private_nh, "pub_freq");
-  gps_pad_offset_ << requireParam<double>(private_nh, "gps_pad_offset_x"),
+  PredictionSettings s;
+  s.filter = loadFilterParameters(private_nh);
+  s.fusion_horizon = requireParam<double>(private_nh, "fusion_horizon");
+  s.world_frame = withoutLeadingSlash(requireParam<std::string>(private_nh, "world_frame"));
+  s.time_step = requireParam<double>(private_nh, "time_step");
+  s.path_time = requireParam<double>(private_nh, "path_time");
+  s.pub_freq = requireParam<double>(private_nh, "pub_freq");
+  s.gps_pad_offset << requireParam<double>(private_nh, "gps_pad_offset_x"),
       requireParam<double>(private_nh, "gps_pad_offset_y");
-  const std::string pose_topic = requireParam<std::string>(private_nh, "pose_topic");
-  const std::string gps_topic = requireParam<std::string>(private_nh, "gps_topic");
-  const std::string relative_topic = requireParam<std::string>(private_nh, "relative_pose_topic");
-  const std::string path_topic = requireParam<std::string>(private_nh, "future_path_topic");
-  const std::string odom_topic = requireParam<std::string>(private_nh, "odom_topic");
-  if (!(std::isfinite(time_step_) && time_step_ > 0.0))
-    throw ParameterError("invalid parameter: " + private_nh.resolveName("time_step") + " must be > 0 [s]");
-  if (!(std::isfinite(path_time_) && path_time_ >= 0.0))
-    throw ParameterError("invalid parameter: " + private_nh.resolveName("path_time") + " must be >= 0 [s]");
-  if (!(std::isfinite(pub_freq_) && pub_freq_ > 0.0))
-    throw ParameterError("invalid parameter: " + private_nh.resolveName("pub_freq") + " must be > 0 [Hz]");
-  if (!gps_pad_offset_.allFinite())
-    throw ParameterError("invalid parameter: " + private_nh.resolveName("gps_pad_offset_x/y") + " is not finite");
-  if (pose_topic.empty() || path_topic.empty() || odom_topic.empty())
-    throw ParameterError("pose_topic, future_path_topic and odom_topic must not be empty");
+  s.pose_topic = requireTopicParam(private_nh, "pose_topic");
+  s.relative_pose_topic = requireTopicParam(private_nh, "relative_pose_topic");
+  s.gps_topic = requireTopicParam(private_nh, "gps_topic");
+  s.future_path_topic = requireTopicParam(private_nh, "future_path_topic");
+  s.odom_topic = requireTopicParam(private_nh, "odom_topic");
+  const std::string problem = s.validate();
+  if (!problem.empty())
+    throw ParameterError("invalid parameter: " + private_nh.resolveName("") + "/" + problem);
+  return s;
+}
 
-  path_pub_ = nh.advertise<nav_msgs::Path>(path_topic, 10);
-  odom_pub_ = nh.advertise<nav_msgs::Odometry>(odom_topic, 10);
+PredictionNode::PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
+  : nh_(nh), private_nh_(private_nh), settings_(loadSettings(private_nh)), track_(settings_)
+{
+  rejections_.emplace();
+  connect(settings_, nullptr);
+  reset_service_ = private_nh_.advertiseService("reset", &PredictionNode::onReset, this);
+}
+
+void PredictionNode::connect(const PredictionSettings& settings, const PredictionSettings* previous)
+{
+  // Kept when unchanged: a re-made subscription would lose the connections and what is in flight on them.
+  auto changed = [&settings, previous](std::string PredictionSettings::*topic) {
+    return previous == nullptr || previous->*topic != settings.*topic;
+  };
   // Low latency matters more than bandwidth: every detection is used at its own stamp.
-  detection_sub_ = nh.subscribe(pose_topic, 30, &PredictionNode::onDetection, this, ros::TransportHints().tcpNoDelay());
-  if (!relative_topic.empty())
-    relative_sub_ = nh.subscribe(relative_topic, 30, &PredictionNode::onRelativeDetection, this,
-                                 ros::TransportHints().tcpNoDelay());
-  if (!gps_topic.empty())
-    gps_sub_ = nh.subscribe(gps_topic, 10, &PredictionNode::onGps, this, ros::TransportHints().tcpNoDelay());
-  lockstep_.emplace(nh, ros::Duration(1.0 / pub_freq_));
-  timer_ = nh.createTimer(ros::Duration(1.0 / pub_freq_), &PredictionNode::onTimer, this);
+  const ros::TransportHints no_delay = ros::TransportHints().tcpNoDelay();
+  if (changed(&PredictionSettings::future_path_topic))
+    path_pub_ = nh_.advertise<nav_msgs::Path>(settings.future_path_topic, 10);
+  if (changed(&PredictionSettings::odom_topic))
+    odom_pub_ = nh_.advertise<nav_msgs::Odometry>(settings.odom_topic, 10);
+  if (changed(&PredictionSettings::pose_topic))
+    detection_sub_ = nh_.subscribe(settings.pose_topic, 30, &PredictionNode::onDetection, this, no_delay);
+  if (changed(&PredictionSettings::relative_pose_topic))
+    relative_sub_ = settings.relative_pose_topic.empty() ?
+                        ros::Subscriber() :
+                        nh_.subscribe(settings.relative_pose_topic, 30, &PredictionNode::onRelativeDetection, this,
+                                      no_delay);
+  if (changed(&PredictionSettings::gps_topic))
+    gps_sub_ = settings.gps_topic.empty() ?
+                   ros::Subscriber() :
+                   nh_.subscribe(settings.gps_topic, 10, &PredictionNode::onGps, this, no_delay);
+  if (previous == nullptr || previous->pub_freq != settings.pub_freq)
+  {
+    lockstep_.reset();  // its publisher let go before the new one advertises the same topic
+    lockstep_.emplace(nh_, ros::Duration(1.0 / settings.pub_freq));
+    timer_ = nh_.createTimer(ros::Duration(1.0 / settings.pub_freq), &PredictionNode::onTimer, this);
+  }
   ROS_INFO("Predicting the pad from %s%s%s: %s (nav_msgs/Path, %.1f s ahead every %.2f s) and %s at %.1f Hz",
-           detection_sub_.getTopic().c_str(), gps_topic.empty() ? "" : " and ",
-           gps_topic.empty() ? "" : gps_sub_.getTopic().c_str(), path_pub_.getTopic().c_str(), path_time_,
-           time_step_, odom_pub_.getTopic().c_str(), pub_freq_);
+           detection_sub_.getTopic().c_str(), settings.gps_topic.empty() ? "" : " and ",
+           settings.gps_topic.empty() ? "" : gps_sub_.getTopic().c_str(), path_pub_.getTopic().c_str(),
+           settings.path_time, settings.time_step, odom_pub_.getTopic().c_str(), settings.pub_freq);
+}
+
+bool PredictionNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response)
+{
+  const std::string node = ros::this_node::getName();
+  // Everything new is built before anything is let go of: a refused reset leaves the node as it was.
+  std::optional<PredictionSettings> settings;
+  std::optional<Track> track;
+  try
+  {
+    settings.emplace(loadSettings(private_nh_));
+    track.emplace(*settings);
+  }
+  catch (const std::exception& error)  // ParameterError; std::invalid_argument from the filter
+  {
+    response.success = false;
+    response.message = node + " not reset (it goes on as it was): " + error.what();
+    ROS_ERROR("%s", response.message.c_str());
+    return true;
+  }
+  connect(*settings, &settings_);
+  settings_ = std::move(*settings);
+  track_ = std::move(*track);
+  rejections_.emplace();
+  response.success = true;
+  response.message = node + " reset";
+  ROS_INFO("%s", response.message.c_str());
+  return true;
 }
 
 ros::Time PredictionNode::stampOf(const std_msgs::Header& header) const
@@ -161,17 +212,17 @@ void PredictionNode::onDetection(const geometry_msgs::PointStamped::ConstPtr& ms
     return;
   }
   const std::string frame = withoutLeadingSlash(msg->header.frame_id);
-  if (!frame.empty() && frame != world_frame_)
+  if (!frame.empty() && frame != settings_.world_frame)
   {
     ROS_WARN_THROTTLE(5.0, "Dropping detections on %s in frame '%s': expected '%s'",
-                      detection_sub_.getTopic().c_str(), frame.c_str(), world_frame_.c_str());
+                      detection_sub_.getTopic().c_str(), frame.c_str(), settings_.world_frame.c_str());
     return;
   }
   if (auto problem = inputProblem(msg->header, {{"point.x", position.x()}, {"point.y", position.y()},
                                                 {"point.z", position.z()}}, landing_msgs::kMaxPositionM))
-    return rejections_.reject(detection_sub_.getTopic(), *problem);
+    return rejections_->reject(detection_sub_.getTopic(), *problem);
   const ros::Time stamp = stampOf(msg->header);
-  logOutcome(filter_.addVision(stamp.toSec(), position, visionVariance(stamp)), detection_sub_.getTopic(), stamp);
+  logOutcome(track_.filter.addVision(stamp.toSec(), position, visionVariance(stamp)), detection_sub_.getTopic(), stamp);
 }
 
 void PredictionNode::onRelativeDetection(const geometry_msgs::PointStamped::ConstPtr& msg)
@@ -179,28 +230,28 @@ void PredictionNode::onRelativeDetection(const geometry_msgs::PointStamped::Cons
   // Relative to the drone: its height above the pad at most, and a camera's view across.
   if (auto problem = inputProblem(msg->header, {{"point.x", msg->point.x}, {"point.y", msg->point.y},
                                                 {"point.z", msg->point.z}}, landing_msgs::kMaxAltitudeM))
-    return rejections_.reject(relative_sub_.getTopic(), *problem);
+    return rejections_->reject(relative_sub_.getTopic(), *problem);
   const double range = std::sqrt(msg->point.x * msg->point.x + msg->point.y * msg->point.y + msg->point.z * msg->point.z);
-  last_range_ = std::make_pair(stampOf(msg->header), range);
+  track_.last_range = std::make_pair(stampOf(msg->header), range);
 }
 
 double PredictionNode::visionVariance(const ros::Time& stamp) const
 {
   // The relative fix of the same frame gives the range; the previous frame's is close enough.
   constexpr double kMaxRangeAge = 0.2;  // [s]
-  if (last_range_ && std::abs((stamp - last_range_->first).toSec()) <= kMaxRangeAge)
-    return filter_.parameters().visionVariance(last_range_->second);
-  return filter_.parameters().observation_covariance;
+  if (track_.last_range && std::abs((stamp - track_.last_range->first).toSec()) <= kMaxRangeAge)
+    return track_.filter.parameters().visionVariance(track_.last_range->second);
+  return track_.filter.parameters().observation_covariance;
 }
 
 void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
 {
   const geometry_msgs::Point& p = msg->pose.pose.position;
   const geometry_msgs::Quaternion& q = msg->pose.pose.orientation;
-  if (auto problem = landing_msgs::frameProblem(msg->header.frame_id, world_frame_))
-    return rejections_.reject(gps_sub_.getTopic(), *problem);
+  if (auto problem = landing_msgs::frameProblem(msg->header.frame_id, settings_.world_frame))
+    return rejections_->reject(gps_sub_.getTopic(), *problem);
   if (auto problem = landing_msgs::stampProblem(msg->header.stamp, ros::Time::now()))
-    return rejections_.reject(gps_sub_.getTopic(), *problem);
+    return rejections_->reject(gps_sub_.getTopic(), *problem);
   // A NaN is dropped field by field below (a report without that part); a finite value must be plausible.
   const geometry_msgs::Vector3& v = msg->twist.twist.linear;
   for (const auto& [name, value, limit] : {std::tuple<const char*, double, double>{"position.x", p.x, landing_msgs::kMaxPositionM},
@@ -210,7 +261,7 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
                                            {"twist.angular.z", msg->twist.twist.angular.z, landing_msgs::kMaxRateRadps}})
     if (std::isfinite(value))
       if (auto problem = landing_msgs::numberProblem(name, value, limit))
-        return rejections_.reject(gps_sub_.getTopic(), *problem);
+        return rejections_->reject(gps_sub_.getTopic(), *problem);
   VehicleReport report;
   // Without a fix (a receiver in a dropout) the report still carries the vehicle's odometry; its position
   // variance then says "unknown".
@@ -218,7 +269,7 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   {
     Eigen::Vector2d pad(p.x, p.y);
     // The receiver sits at the vehicle origin; the pad centre is offset in the vehicle frame.
-    pad += Eigen::Rotation2Dd(tf2::getYaw(q)) * gps_pad_offset_;
+    pad += Eigen::Rotation2Dd(tf2::getYaw(q)) * settings_.gps_pad_offset;
     if (!pad.allFinite())
     {
       ROS_WARN_THROTTLE(5.0, "Dropping a GPS fix with NaN or inf on %s", gps_sub_.getTopic().c_str());
@@ -264,7 +315,7 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
       ROS_WARN_THROTTLE(5.0, "Dropping a yaw rate with NaN or inf on %s", gps_sub_.getTopic().c_str());
   }
   const ros::Time stamp = stampOf(msg->header);
-  logOutcome(filter_.addVehicleReport(stamp.toSec(), report), gps_sub_.getTopic(), stamp);
+  logOutcome(track_.filter.addVehicleReport(stamp.toSec(), report), gps_sub_.getTopic(), stamp);
 }
 
 std::optional<landing_msgs::InputProblem> PredictionNode::inputProblem(
@@ -288,14 +339,14 @@ void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& t
     case MeasurementOutcome::kReinitialised:
       // Throttled: garbage fixes (the fuzz scenario) restarted the track 4 times in a second.
       ROS_WARN_THROTTLE(5.0, "Pad track restarted from %s at t = %.3f s: %d fixes in a row outside the gate",
-               topic.c_str(), stamp.toSec(), filter_.parameters().max_consecutive_rejections);
+               topic.c_str(), stamp.toSec(), track_.filter.parameters().max_consecutive_rejections);
       break;
     case MeasurementOutcome::kRejected:
       ROS_INFO_THROTTLE(5.0, "Rejecting outliers on %s (outside the gate)", topic.c_str());
       break;
     case MeasurementOutcome::kDroppedStale:
       ROS_WARN_THROTTLE(5.0, "Dropping fixes on %s older than the fusion horizon (%.2f s) or than the last fix "
-                        "of their source (t = %.3f s)", topic.c_str(), filter_.horizon(), stamp.toSec());
+                        "of their source (t = %.3f s)", topic.c_str(), track_.filter.horizon(), stamp.toSec());
       break;
     case MeasurementOutcome::kDroppedInvalid:
       ROS_WARN_THROTTLE(5.0, "Dropping a fix with a non-finite stamp on %s", topic.c_str());
@@ -309,33 +360,33 @@ void PredictionNode::logOutcome(MeasurementOutcome outcome, const std::string& t
 void PredictionNode::onTimer(const ros::TimerEvent&)
 {
   const ros::Time now = ros::Time::now();
-  if (now < last_tick_)
+  if (now < track_.last_tick)
   {
     // The clock went backwards (simulation restarted): the old track and stamps mean nothing now.
-    ROS_WARN("Time jumped back from %.3f s to %.3f s: resetting the pad track", last_tick_.toSec(), now.toSec());
-    filter_.reset();
+    ROS_WARN("Time jumped back from %.3f s to %.3f s: resetting the pad track", track_.last_tick.toSec(), now.toSec());
+    track_.filter.reset();
   }
-  last_tick_ = now;
+  track_.last_tick = now;
   step(now);
   lockstep_->ack(now);
 }
 
 void PredictionNode::step(const ros::Time& now)
 {
-  const bool tracking = filter_.isTracking(now.toSec());
-  if (tracking != tracking_)
+  const bool tracking = track_.filter.isTracking(now.toSec());
+  if (tracking != track_.tracking)
   {
     if (tracking)
       ROS_INFO_THROTTLE(2.0, "Tracking the pad: publishing %s and %s", path_pub_.getTopic().c_str(),
                         odom_pub_.getTopic().c_str());
     else
       ROS_WARN_THROTTLE(2.0, "Pad track lost (no accepted fix for %.1f s): not publishing until it is found again",
-                        filter_.parameters().max_coast_time);
-    tracking_ = tracking;
+                        track_.filter.parameters().max_coast_time);
+    track_.tracking = tracking;
   }
   if (!tracking)
     return;
-  const std::optional<PadState> state = filter_.stateAt(now.toSec());
+  const std::optional<PadState> state = track_.filter.stateAt(now.toSec());
   if (state)
     publish(now, *state);
 }
@@ -344,12 +395,12 @@ void PredictionNode::publish(const ros::Time& now, const PadState& state)
 {
   nav_msgs::Path path;
   path.header.stamp = now;
-  path.header.frame_id = world_frame_;
-  for (const PathPoint& point : filter_.predictPath(now.toSec(), time_step_, path_time_))
+  path.header.frame_id = settings_.world_frame;
+  for (const PathPoint& point : track_.filter.predictPath(now.toSec(), settings_.time_step, settings_.path_time))
   {
     geometry_msgs::PoseStamped pose;
     pose.header.stamp = ros::Time(point.time);
-    pose.header.frame_id = world_frame_;
+    pose.header.frame_id = settings_.world_frame;
     pose.pose.position.x = point.position.x();
     pose.pose.position.y = point.position.y();
     pose.pose.position.z = point.position.z();
@@ -361,7 +412,7 @@ void PredictionNode::publish(const ros::Time& now, const PadState& state)
   nav_msgs::Odometry odom;
   odom.header = path.header;
   // The twist is expressed in the world frame (conventions.md), so the child frame is the world too.
-  odom.child_frame_id = world_frame_;
+  odom.child_frame_id = settings_.world_frame;
   odom.pose.pose.position = path.poses.front().pose.position;
   odom.pose.pose.orientation = travelDirection(state.velocity);
   odom.twist.twist.linear.x = state.velocity.x();

@@ -116,13 +116,18 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
   return c;
 }
 
+DetectionState::DetectionState(const PlatformDetectionConfig& config)
+    : config(config),
+      localizer(config.localizer, CameraMount::bottomCamera(config.localizer.height.camera_below_base_link)),
+      attitudes(config.imu_max_offset),
+      estimates(config.odom_timeout) {}
+
 PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle pnh)
-    : config_(PlatformDetectionConfig::load(pnh)),
-      localizer_(config_.localizer, CameraMount::bottomCamera(config_.localizer.height.camera_below_base_link)),
+    : pnh_(pnh),
+      state_(PlatformDetectionConfig::load(pnh)),
       image_transport_(nh),
-      attitudes_(config_.imu_max_offset),
-      estimates_(config_.odom_timeout),
       lockstep_(nh, "ardrone/bottom/image_raw") {
+  rejections_.emplace();
   platform_in_base_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_ardrone", 10);
   platform_in_world_pub_ = nh.advertise<geometry_msgs::PointStamped>("platform/current_platform_position_in_world", 10);
   indicator_in_base_pub_ =
@@ -138,8 +143,28 @@ PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle p
   // Queue of one: always work on the newest frame, never on a backlog.
   image_sub_ = image_transport_.subscribe("ardrone/bottom/image_raw", 1, &PlatformDetectionRos::onImage, this,
                                           image_transport::TransportHints("raw", no_delay));
+  reset_service_ = pnh_.advertiseService("reset", &PlatformDetectionRos::onReset, this);
   ROS_INFO("platform_detection: looking for a %.2f m pad whose top is %.3f m above the ground",
-           config_.localizer.detector.pad.side, config_.localizer.height.height_landing_platform);
+           state_.config.localizer.detector.pad.side, state_.config.localizer.height.height_landing_platform);
+}
+
+bool PlatformDetectionRos::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  const std::string node = ros::this_node::getName();
+  try {
+    // Built whole before it replaces the old state: a refused reset leaves the node as it was.
+    DetectionState fresh(PlatformDetectionConfig::load(pnh_));
+    state_ = std::move(fresh);
+  } catch (const std::exception& error) {  // ConfigError; anything the detector's set-up refuses
+    response.success = false;
+    response.message = node + " not reset (it goes on as it was): " + error.what();
+    ROS_ERROR("%s", response.message.c_str());
+    return true;
+  }
+  rejections_.emplace();
+  response.success = true;
+  response.message = node + " reset";
+  ROS_INFO("%s", response.message.c_str());
+  return true;
 }
 
 void PlatformDetectionRos::onCameraInfo(const sensor_msgs::CameraInfoConstPtr& msg) {
@@ -153,11 +178,11 @@ void PlatformDetectionRos::onCameraInfo(const sensor_msgs::CameraInfoConstPtr& m
   std::string problem = lensDistortion(msg->distortion_model, msg->D, k.distortion);
   if (problem.empty()) problem = k.problem();
   if (!problem.empty()) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped (the last good one still serves): %s",
+    ROS_WARN_THROTTLE(state_.config.warn_period, "%s: dropped (the last good one still serves): %s",
                       camera_info_sub_.getTopic().c_str(), problem.c_str());
     return;
   }
-  intrinsics_ = k;
+  state_.intrinsics = k;
 }
 
 void PlatformDetectionRos::onImu(const sensor_msgs::ImuConstPtr& msg) {
@@ -165,66 +190,69 @@ void PlatformDetectionRos::onImu(const sensor_msgs::ImuConstPtr& msg) {
   const Eigen::Quaterniond q(o.w, o.x, o.y, o.z);
   // covariance[0] == -1 means "no orientation" (REP 145).
   if (!(q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 0.1) || msg->orientation_covariance[0] == -1.0) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a message without a valid orientation quaternion",
+    ROS_WARN_THROTTLE(state_.config.warn_period, "%s: dropped a message without a valid orientation quaternion",
                       imu_sub_.getTopic().c_str());
     return;
   }
   const auto& w = msg->angular_velocity;
-  if (auto problem = inputProblem(msg->header, config_.base_frame)) return rejections_.reject(imu_sub_.getTopic(), *problem);
+  if (auto problem = inputProblem(msg->header, state_.config.base_frame))
+    return rejections_->reject(imu_sub_.getTopic(), *problem);
   for (const auto& [name, value] : {std::pair<const char*, double>{"angular_velocity.x", w.x}, {"angular_velocity.y", w.y},
                                     {"angular_velocity.z", w.z}})
     if (auto problem = landing_msgs::numberProblem(name, value, landing_msgs::kMaxRateRadps))
-      return rejections_.reject(imu_sub_.getTopic(), *problem);
+      return rejections_->reject(imu_sub_.getTopic(), *problem);
   // angular_velocity_covariance[0] == -1: no rates (REP 145); the attitude is then held between samples.
   const Eigen::Vector3d body_rate = msg->angular_velocity_covariance[0] == -1.0 ? Eigen::Vector3d::Zero()
                                                                                  : Eigen::Vector3d(w.x, w.y, w.z);
-  attitudes_.add(msg->header.stamp.toSec(), q, body_rate);  // a stamp going back restarts the history
+  state_.attitudes.add(msg->header.stamp.toSec(), q, body_rate);  // a stamp going back restarts the history
 }
 
 void PlatformDetectionRos::onSonar(const sensor_msgs::RangeConstPtr& msg) {
   // +inf is a valid reading (nothing in range); NaN or negative is not.
   if (std::isnan(msg->range) || msg->range < 0.0) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped an invalid range %f", sonar_sub_.getTopic().c_str(),
+    ROS_WARN_THROTTLE(state_.config.warn_period, "%s: dropped an invalid range %f", sonar_sub_.getTopic().c_str(),
                       msg->range);
     return;
   }
-  if (auto problem = inputProblem(msg->header, config_.base_frame)) return rejections_.reject(sonar_sub_.getTopic(), *problem);
+  if (auto problem = inputProblem(msg->header, state_.config.base_frame))
+    return rejections_->reject(sonar_sub_.getTopic(), *problem);
   if (!(msg->field_of_view >= 0.0 && msg->field_of_view < M_PI)) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a reading whose field_of_view %f is not in [0, pi) rad",
+    ROS_WARN_THROTTLE(state_.config.warn_period, "%s: dropped a reading whose field_of_view %f is not in [0, pi) rad",
                       sonar_sub_.getTopic().c_str(), msg->field_of_view);
     return;
   }
-  sonar_ranges_.add(msg->header.stamp.toSec(), msg->range);
-  sonar_half_angle_ = 0.5 * msg->field_of_view;
+  state_.sonar_ranges.add(msg->header.stamp.toSec(), msg->range);
+  state_.sonar_half_angle = 0.5 * msg->field_of_view;
 }
 
 void PlatformDetectionRos::onAltimeter(const landing_msgs::AltimeterConstPtr& msg) {
   if (!std::isfinite(msg->altitude)) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a non-finite altitude", altimeter_sub_.getTopic().c_str());
+    ROS_WARN_THROTTLE(state_.config.warn_period, "%s: dropped a non-finite altitude",
+                      altimeter_sub_.getTopic().c_str());
     return;
   }
   if (auto problem = landing_msgs::numberProblem("altitude", msg->altitude, landing_msgs::kMaxAltitudeM))
-    return rejections_.reject(altimeter_sub_.getTopic(), *problem);
+    return rejections_->reject(altimeter_sub_.getTopic(), *problem);
   if (auto problem = inputProblem(msg->header, ""))  // an altitude above the ground: any frame
-    return rejections_.reject(altimeter_sub_.getTopic(), *problem);
-  altitudes_.add(msg->header.stamp.toSec(), msg->altitude);
+    return rejections_->reject(altimeter_sub_.getTopic(), *problem);
+  state_.altitudes.add(msg->header.stamp.toSec(), msg->altitude);
 }
 
 void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg) {
   const auto& p = msg->pose.pose.position;
   if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped a non-finite position", odom_sub_.getTopic().c_str());
+    ROS_WARN_THROTTLE(state_.config.warn_period, "%s: dropped a non-finite position", odom_sub_.getTopic().c_str());
     return;
   }
-  if (!msg->header.frame_id.empty() && msg->header.frame_id != config_.world_frame) {
-    ROS_WARN_THROTTLE(config_.warn_period, "%s: dropped: position in frame '%s', expected '%s'",
-                      odom_sub_.getTopic().c_str(), msg->header.frame_id.c_str(), config_.world_frame.c_str());
+  if (!msg->header.frame_id.empty() && msg->header.frame_id != state_.config.world_frame) {
+    ROS_WARN_THROTTLE(state_.config.warn_period, "%s: dropped: position in frame '%s', expected '%s'",
+                      odom_sub_.getTopic().c_str(), msg->header.frame_id.c_str(), state_.config.world_frame.c_str());
     return;
   }
   for (const auto& [name, value] : {std::pair<const char*, double>{"position.x", p.x}, {"position.y", p.y}, {"position.z", p.z}})
     if (auto problem = landing_msgs::numberProblem(name, value, landing_msgs::kMaxPositionM))
-      return rejections_.reject(odom_sub_.getTopic(), *problem);
-  if (auto problem = inputProblem(msg->header, "")) return rejections_.reject(odom_sub_.getTopic(), *problem);
+      return rejections_->reject(odom_sub_.getTopic(), *problem);
+  if (auto problem = inputProblem(msg->header, "")) return rejections_->reject(odom_sub_.getTopic(), *problem);
   const auto& v = msg->twist.twist.linear;
   const Eigen::Vector3d velocity =
       std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) &&
@@ -236,11 +264,11 @@ void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg)
   const double stamp = msg->header.stamp.toSec();
   double heading_turn = 0.0;
   const auto& q = msg->pose.pose.orientation;
-  const auto imu = attitudes_.at(stamp);
+  const auto imu = state_.attitudes.at(stamp);
   if (imu && std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) &&
       q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z > 0.25)
     heading_turn = headingTurn(Eigen::Quaterniond(q.w, q.x, q.y, q.z), *imu);
-  estimates_.add({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity, heading_turn});
+  state_.estimates.add({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity, heading_turn});
 }
 
 std::optional<landing_msgs::InputProblem> PlatformDetectionRos::inputProblem(const std_msgs::Header& header,
@@ -257,7 +285,7 @@ void PlatformDetectionRos::onImage(const sensor_msgs::ImageConstPtr& msg) {
 
 void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
   namespace enc = sensor_msgs::image_encodings;
-  const double period = config_.warn_period;
+  const double period = state_.config.warn_period;
   const std::string topic_name = image_sub_.getTopic();
   const char* topic = topic_name.c_str();
   ColorOrder order;
@@ -277,32 +305,33 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
     return;
   }
   if (auto problem = inputProblem(msg->header, "")) {
-    rejections_.reject(topic_name, *problem);
+    rejections_->reject(topic_name, *problem);
     return;
   }
-  if (!intrinsics_) {
+  if (!state_.intrinsics) {
     ROS_WARN_THROTTLE(period, "%s: no valid %s yet: frame dropped", topic, camera_info_sub_.getTopic().c_str());
     return;
   }
-  if (int(msg->width) != intrinsics_->width || int(msg->height) != intrinsics_->height) {
+  if (int(msg->width) != state_.intrinsics->width || int(msg->height) != state_.intrinsics->height) {
     ROS_WARN_THROTTLE(period, "%s: dropped a %ux%u frame: %s is for %dx%d", topic, msg->width, msg->height,
-                      camera_info_sub_.getTopic().c_str(), intrinsics_->width, intrinsics_->height);
+                      camera_info_sub_.getTopic().c_str(), state_.intrinsics->width, state_.intrinsics->height);
     return;
   }
   const ros::Time stamp = msg->header.stamp;
-  const auto attitude = attitudes_.at(stamp.toSec());
+  const auto attitude = state_.attitudes.at(stamp.toSec());
   if (!attitude) {
     ROS_WARN_THROTTLE(period, "%s: no %s within %.3f s of the frame: dropped", topic, imu_sub_.getTopic().c_str(),
-                      config_.imu_max_offset);
+                      state_.config.imu_max_offset);
     return;
   }
   // The readings of the frame's capture time, not the newest: the frame is 100-200 ms old.
-  const double sonar = sonar_ranges_.medianNear(stamp.toSec(), config_.sonar_timeout);
-  const double altitude = altitudes_.meanNear(stamp.toSec(), config_.altimeter_window, config_.altimeter_timeout);
+  const double sonar = state_.sonar_ranges.medianNear(stamp.toSec(), state_.config.sonar_timeout);
+  const double altitude =
+      state_.altitudes.meanNear(stamp.toSec(), state_.config.altimeter_window, state_.config.altimeter_timeout);
   if (std::isnan(sonar) && std::isnan(altitude)) {
     ROS_WARN_THROTTLE(period, "%s: no %s or %s within %.2f s / %.2f s of the frame to give the height: dropped", topic,
-                      sonar_sub_.getTopic().c_str(), altimeter_sub_.getTopic().c_str(), config_.sonar_timeout,
-                      config_.altimeter_timeout);
+                      sonar_sub_.getTopic().c_str(), altimeter_sub_.getTopic().c_str(), state_.config.sonar_timeout,
+                      state_.config.altimeter_timeout);
     return;
   }
   cv_bridge::CvImageConstPtr image;
@@ -316,31 +345,33 @@ void PlatformDetectionRos::processImage(const sensor_msgs::ImageConstPtr& msg) {
   // frame is dropped with the reason, the node goes on (an exception out of a callback would abort it).
   try {
     const PadObservation observation =
-        localizer_.observe(image->image, order, *intrinsics_, *attitude, sonar, altitude, sonar_half_angle_);
+        state_.localizer.observe(image->image, order, *state_.intrinsics, *attitude, sonar, altitude,
+                                 state_.sonar_half_angle);
     if (observation.found)
       publish(msg->header, observation);
     else
       ROS_DEBUG_THROTTLE(1.0, "no pad: %s", observation.reason.c_str());
-    if (debug_pub_.getNumSubscribers() > 0) publishDebugImage(msg, image->image, observation, *intrinsics_);
+    if (debug_pub_.getNumSubscribers() > 0) publishDebugImage(msg, image->image, observation, *state_.intrinsics);
   } catch (const std::exception& e) {
     ROS_WARN_THROTTLE(period, "%s: dropped a frame the detector could not process: %s", topic, e.what());
   }
 }
 
 void PlatformDetectionRos::publish(const std_msgs::Header& image_header, const PadObservation& observation) {
-  platform_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.centre_in_body));
+  platform_in_base_pub_.publish(pointMsg(image_header, state_.config.base_frame, observation.centre_in_body));
   if (observation.strip_found)
-    indicator_in_base_pub_.publish(pointMsg(image_header, config_.base_frame, observation.strip_in_body));
-  const std::optional<DroneEstimate> drone = estimates_.at(image_header.stamp.toSec());
+    indicator_in_base_pub_.publish(pointMsg(image_header, state_.config.base_frame, observation.strip_in_body));
+  const std::optional<DroneEstimate> drone = state_.estimates.at(image_header.stamp.toSec());
   if (!drone) {
-    ROS_WARN_THROTTLE(config_.warn_period, "no %s within %.2f s of the frame: publishing the relative pad position only",
-                      odom_sub_.getTopic().c_str(), config_.odom_timeout);
+    ROS_WARN_THROTTLE(state_.config.warn_period,
+                      "no %s within %.2f s of the frame: publishing the relative pad position only",
+                      odom_sub_.getTopic().c_str(), state_.config.odom_timeout);
     return;
   }
   // The IMU attitude turned the vector to its own world axes, whose yaw drifts; the estimate's heading corrects it.
   const Eigen::Vector3d offset = Eigen::AngleAxisd(drone->heading_turn, Eigen::Vector3d::UnitZ()) *
                                  observation.centre_world_aligned;
-  platform_in_world_pub_.publish(pointMsg(image_header, config_.world_frame, drone->position + offset));
+  platform_in_world_pub_.publish(pointMsg(image_header, state_.config.world_frame, drone->position + offset));
 }
 
 void PlatformDetectionRos::publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image,

@@ -11,19 +11,24 @@
 //   future_path_topic  nav_msgs/Path      pad positions at now + k*time_step, k = 0..path_time/time_step
 //   odom_topic         nav_msgs/Odometry  filtered pad position and world-frame velocity, with covariances
 // Nothing is published while there is no track or it is lost; consumers detect that from the stamps.
+// Service ~reset (std_srvs/Trigger): the parameters are read again as they are at the call and the track starts
+// afresh, as after a restart; a missing or invalid parameter refuses it and the node goes on as it was.
 #pragma once
 
 #include "ped_traj_pred/delayed_fusion.h"
+#include "ped_traj_pred/prediction_settings.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <landing_msgs/input_check.h>
 #include <landing_msgs/lockstep_acker.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <std_srvs/Trigger.h>
 
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace ped_traj_pred
 {
@@ -34,6 +39,10 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+/// Every parameter of the node from `private_nh`, validated. Throws ParameterError naming the first missing or
+/// invalid one. Start-up and ~reset both read them through this.
+PredictionSettings loadSettings(const ros::NodeHandle& private_nh);
+
 class PredictionNode
 {
 public:
@@ -42,6 +51,21 @@ public:
   PredictionNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh);
 
 private:
+  /// What a scenario builds up; a fresh start and a reset make it from the settings alone.
+  struct Track
+  {
+    explicit Track(const PredictionSettings& settings) : filter(settings.filter, settings.fusion_horizon) {}
+    DelayedFusion filter;  // frames and GPS reports arrive late: fused in the order they were taken
+    std::optional<std::pair<ros::Time, double>> last_range;  // stamp and camera range of the latest relative fix
+    bool tracking = false;  // as of the last timer tick, for logging the transitions once
+    ros::Time last_tick;
+  };
+
+  /// (Re)creates the subscribers, publishers and timer whose topic or rate differs from `previous` (all of them
+  /// without one). Topic names are valid (loadSettings checked them).
+  void connect(const PredictionSettings& settings, const PredictionSettings* previous);
+  /// ~reset: new settings and an empty track, or (bad parameters) nothing changed.
+  bool onReset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
   void onDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
   void onGps(const nav_msgs::Odometry::ConstPtr& msg);
   void onRelativeDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
@@ -59,22 +83,17 @@ private:
   void logOutcome(MeasurementOutcome outcome, const std::string& topic, const ros::Time& stamp);
   void publish(const ros::Time& now, const PadState& state);
 
-  // Parameters.
-  std::string world_frame_;
-  double time_step_;             // [s]
-  double path_time_;             // [s]
-  double pub_freq_;              // [Hz]
-  Eigen::Vector2d gps_pad_offset_;  // pad centre in the vehicle frame relative to the GPS point [m]
-
-  DelayedFusion filter_;  // frames and GPS reports arrive late: fused in the order they were taken
+  // Callbacks, timer and ~reset all run on the one spinner thread of main(): they never touch this at once.
+  ros::NodeHandle nh_, private_nh_;
+  PredictionSettings settings_;
+  Track track_;
   ros::Subscriber detection_sub_, gps_sub_, relative_sub_;
-  std::optional<std::pair<ros::Time, double>> last_range_;  // stamp and camera range of the latest relative fix
   ros::Publisher path_pub_, odom_pub_;
   ros::Timer timer_;
-  bool tracking_ = false;     // as of the last timer tick, for logging the transitions once
-  ros::Time last_tick_;
   std::optional<landing_msgs::LockstepAcker> lockstep_;  // created once pub_freq is known
-  landing_msgs::RejectionLog rejections_;  // garbage on the inputs: what was wrong, once per topic and kind
+  // Garbage on the inputs: what was wrong, once per topic and kind (optional: a reset makes a new one).
+  std::optional<landing_msgs::RejectionLog> rejections_;
+  ros::ServiceServer reset_service_;
 };
 
 }  // namespace ped_traj_pred

@@ -1,5 +1,7 @@
 // ROS wrapper of the pad localizer: the platform_detection node (thin: sensor plumbing, checks of the
 // incoming messages, publishing). The algorithm lives in the ROS-free uav_vision_detector library.
+// Service ~reset (std_srvs/Trigger): the parameters are read again as they are at the call and every history is
+// emptied, as after a restart; a missing or invalid parameter refuses it and the node goes on as it was.
 #pragma once
 
 #include <deque>
@@ -20,6 +22,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/Range.h>
+#include <std_srvs/Trigger.h>
 
 #include "uav_vision/attitude_history.h"
 #include "uav_vision/estimate_history.h"
@@ -48,12 +51,29 @@ struct PlatformDetectionConfig {
   static PlatformDetectionConfig load(const ros::NodeHandle& pnh);
 };
 
+// What the node builds up from its configuration and the sensors; a fresh start and a reset make it the same
+// way, from the configuration alone.
+struct DetectionState {
+  explicit DetectionState(const PlatformDetectionConfig& config);
+
+  PlatformDetectionConfig config;
+  PadLocalizer localizer;
+  std::optional<CameraIntrinsics> intrinsics;  // from the last valid camera_info
+  AttitudeHistory attitudes;  // the last second of IMU attitudes and rates
+  ReadingHistory sonar_ranges, altitudes;  // the last second of sonar ranges and barometric altitudes
+  double sonar_half_angle = 0.0;  // half the sonar's field_of_view [rad]
+  EstimateHistory estimates;  // the last second of ardrone/odom_estimate
+};
+
 class PlatformDetectionRos {
  public:
-  // Subscribes and advertises on `nh` (relative names); parameters from `pnh`. Throws ConfigError.
+  // Subscribes and advertises on `nh` (relative names); parameters from `pnh`, and the ~reset service there.
+  // Throws ConfigError.
   PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle pnh);
 
  private:
+  // ~reset: a new state from the parameters as they are, or (a bad parameter) nothing changed.
+  bool onReset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
   void onImage(const sensor_msgs::ImageConstPtr& msg);
   void processImage(const sensor_msgs::ImageConstPtr& msg);
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& msg);
@@ -68,21 +88,19 @@ class PlatformDetectionRos {
   void publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image, const PadObservation& observation,
                          const CameraIntrinsics& intrinsics);
 
-  PlatformDetectionConfig config_;
-  PadLocalizer localizer_;
+  // The topics are fixed names (remapped by the launch file), so a reset keeps the subscriptions and publishers
+  // (none latched). Callbacks and ~reset all run on the one spinner thread of main(): never on the state at once.
+  ros::NodeHandle pnh_;
+  DetectionState state_;
   image_transport::ImageTransport image_transport_;
   image_transport::Subscriber image_sub_;
   image_transport::Publisher debug_pub_;
   ros::Subscriber camera_info_sub_, imu_sub_, sonar_sub_, altimeter_sub_, odom_sub_;
   ros::Publisher platform_in_base_pub_, platform_in_world_pub_, indicator_in_base_pub_;
-
-  std::optional<CameraIntrinsics> intrinsics_;
-  AttitudeHistory attitudes_;  // the last second of IMU attitudes and rates
-  ReadingHistory sonar_ranges_, altitudes_;  // the last second of sonar ranges and barometric altitudes
-  double sonar_half_angle_ = 0.0;  // half the sonar's field_of_view [rad]
-  EstimateHistory estimates_;  // the last second of ardrone/odom_estimate
   landing_msgs::LockstepAcker lockstep_;
-  landing_msgs::RejectionLog rejections_;  // garbage on the inputs: what was wrong, once per topic and kind
+  // Garbage on the inputs: what was wrong, once per topic and kind (optional: a reset makes a new one).
+  std::optional<landing_msgs::RejectionLog> rejections_;
+  ros::ServiceServer reset_service_;
 };
 
 }  // namespace uav_vision
