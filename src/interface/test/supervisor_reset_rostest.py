@@ -200,6 +200,20 @@ class SupervisorResetTest(unittest.TestCase):
         self.command("landing", "landing")
         self.wait_for(lambda: self.saved_mode() == "landing", "~recovery in mode landing")
 
+    def test_5_the_previous_scenarios_operator_command_does_not_reach_the_reset_supervisor(self):
+        # As the scenario runner does: its operator command is latched, and forgotten before the graph is reset.
+        operator = rospy.Publisher("/operator/command", String, queue_size=1, latch=True)
+        self.wait_for(lambda: operator.get_num_connections() > 0, "the supervisor on operator/command")
+        operator.publish(String(data="manual"))
+        self.wait_for(lambda: self.out.messages["mode"][-1:] == ["manual"], "supervisor/mode manual")
+        operator.impl.latch = None
+        response, _t, before = self.reset()
+        self.assertTrue(response.success, response.message)
+        self.sim_wait(1.0)
+        # rospy keeps the last latched message of the supervisor's connection to this process, and would hand it
+        # to the reset supervisor's new subscriber: it must be forgotten, as a fresh supervisor never got it.
+        self.assertEqual(self.since("mode", before), ["idle"])
+
 
 if __name__ == "__main__":
     rostest.rosrun("interface", "supervisor_reset", SupervisorResetTest)

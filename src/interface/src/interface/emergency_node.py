@@ -71,7 +71,7 @@ class EmergencyNode:
             lambda m: self.pending.append(("mode", m.data))), queue_size=5)
         self.handles.subscriber("operator/command", String, checked(
             "operator/command", lambda m: choice_problem(m.data.strip().lower(), OPERATOR_COMMANDS, "command"),
-            self._on_operator), queue_size=10)
+            self._on_operator), queue_size=10, commands=True)
         position_problem = lambda m: _header_problem(m, WORLD_FRAME) or numbers_problem(  # noqa: E731
             MAX_POSITION_M, position=(m.pose.pose.position.x, m.pose.pose.position.y))
         self.handles.subscriber("ardrone/odom_estimate", Odometry, checked(

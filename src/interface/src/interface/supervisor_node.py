@@ -158,7 +158,7 @@ class SupervisorNode:
         subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
         subscriber("ardrone/navdata", Navdata, self._on_navdata, queue_size=1)
         subscriber("platform/current_platform_position_in_ardrone", PointStamped, self._on_detection, queue_size=5)
-        subscriber("operator/command", String, self._on_operator, queue_size=10)
+        subscriber("operator/command", String, self._on_operator, queue_size=10, commands=True)
         for name in SERVICES:
             self.handles.service("supervisor/" + name, Trigger, self._service(name))
         for name, value in self.params["initial_conditions"].items():

@@ -174,8 +174,16 @@ class NodeHandles:
     def __init__(self):
         self._subscribers, self._latched, self._handlers = [], [], []
 
-    def subscriber(self, *args, **kwargs):
-        self._subscribers.append(rospy.Subscriber(*args, **kwargs))
+    def subscriber(self, topic, *args, commands=False, **kwargs):
+        """rospy.Subscriber(topic, ...). ``commands``: the topic carries one-shot commands (latched so that a
+        respawned node gets the last one), none of which is meant for a node object that a reset has just built.
+        rospy hands a new subscriber the last latched message each existing connection received (ros_comm #1852),
+        whether or not its publisher still holds it; for a command topic that message is forgotten first."""
+        if commands:
+            impl = rospy.topics.get_topic_manager().get_subscriber_impl(rospy.resolve_name(topic))
+            for connection in list(impl.connections) if impl is not None else []:
+                connection.latch = None
+        self._subscribers.append(rospy.Subscriber(topic, *args, **kwargs))
         return self._subscribers[-1]
 
     def latched(self, publisher):
