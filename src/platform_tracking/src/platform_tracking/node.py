@@ -28,6 +28,13 @@ ardrone/takeoff and ardrone/land: an operator's ardrone/land makes it descend at
 tracker then follows the pad down (state LANDING, committed) rather than starting its own approach;
 use platform_tracking/command "land" for the gated landing on the pad.
 
+Restart and reset: respawned after a crash, the estimator starts again from the next GPS fix and the tracker from
+the latched platform_tracking/command and the drone's navdata state (nothing else is kept). Both offer ``~reset``
+(std_srvs/Trigger, landing_msgs.rospy_node.ResettableNode) for the next scenario of a warm graph: the parameters are
+read again as at start-up (a bad one refuses the reset, naming it; the node goes on as it was) and the node starts
+over as a fresh one: the estimator without a fix, the tracker LANDED with no request pending (``autostart`` takes
+off again), its latched platform_tracking/state LANDED again and no camera_latency latched until it measures one.
+
 Inputs that are garbage (non-finite or implausible values, stamps from another time, frames of another tree,
 unknown words) are dropped with a warning naming the topic and what was wrong, once per topic and kind of
 problem every WARN_PERIOD (landing_msgs.input_check).
@@ -35,7 +42,6 @@ problem every WARN_PERIOD (landing_msgs.input_check).
 import collections
 import dataclasses
 import math
-import sys
 import threading
 
 import numpy as np
@@ -45,7 +51,7 @@ from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
-from landing_msgs.rospy_node import direct_publisher, init_node, spin
+from landing_msgs.rospy_node import NodeHandles, direct_publisher, run_node
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, Float64, String
@@ -90,8 +96,9 @@ def odometry_problem(msg, frames=WORLD_FRAMES[:1], position_limit=MAX_POSITION_M
 
 
 def load_params(cls, check=None, namespace="~", exclude=()):
-    """The node's private parameters (or those of a sub-namespace) as ``cls``; a missing or bad one is fatal
-    and named. Sub-namespaces in ``exclude`` are another class's."""
+    """The node's private parameters (or those of a sub-namespace) as ``cls``; a missing or bad one raises a
+    ParamError naming it (fatal at start-up, a refused ~reset later: run_node). Sub-namespaces in ``exclude`` are
+    another class's."""
     source = "%s parameters" % rospy.resolve_name(namespace)
     try:
         mapping = rospy.get_param(namespace, {})
@@ -100,8 +107,7 @@ def load_params(cls, check=None, namespace="~", exclude=()):
         params = from_mapping(cls, mapping, source)
         return params.check(source) if check else params
     except ParamError as err:
-        rospy.logfatal("%s cannot start: %s (see platform_tracking/config/)", rospy.get_name(), err)
-        sys.exit(2)
+        raise ParamError("%s (see platform_tracking/config/)" % err) from None
 
 
 def sonar_problem(msg, base_frame):
@@ -138,11 +144,6 @@ def world_fix(msg, rejections):
     return stamp_of(msg), np.array([p.x, p.y])
 
 
-def wait_for_clock():
-    while not rospy.is_shutdown() and rospy.get_time() == 0.0:
-        rospy.sleep(0.01)  # under /use_sim_time, time is 0 until the first /clock
-
-
 # ------------------------------------------------------------------------------------------------
 def load_flow_surface():
     """The drone's flow model over the vehicle, from ~flow_surface (config/flow_surface_<vehicle>.yaml)."""
@@ -150,9 +151,12 @@ def load_flow_surface():
 
 
 class EstimatorNode:
+    """drone_estimator, driven by its callbacks alone; a ~reset replaces it with a new one (ResettableNode)."""
+
     def __init__(self):
         self.params = load_params(EstimatorParams, exclude=("flow_surface",))
         self.surface = load_flow_surface()
+        self.handles = NodeHandles()  # its subscribers, let go of at a reset
         self.lock = threading.Lock()
         self.estimator = self._new_estimator()
         self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
@@ -161,17 +165,17 @@ class EstimatorNode:
         self.pub_unseen = direct_publisher("ardrone/flow_unseen_velocity", Vector3Stamped)
         self.lockstep = LockstepAcker("ardrone/imu")
         # tcp_nodelay throughout the control loop: Nagle's algorithm would deliver sensor messages in bursts.
-        rospy.Subscriber("ardrone/imu", Imu, self.on_imu, queue_size=20, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=20, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/gps/odom", Odometry, self.on_gps, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/altimeter", Altimeter, self.on_altimeter, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
+        self.handles.subscriber("ardrone/imu", Imu, self.on_imu, queue_size=20, tcp_nodelay=True)
+        self.handles.subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=20, tcp_nodelay=True)
+        self.handles.subscriber("ardrone/gps/odom", Odometry, self.on_gps, queue_size=5, tcp_nodelay=True)
+        self.handles.subscriber("ardrone/altimeter", Altimeter, self.on_altimeter, queue_size=5, tcp_nodelay=True)
+        self.handles.subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
         self.published = StateHistory(ESTIMATE_HISTORY, keep=2)  # odom_estimate's xy, to take it off the fixes
         if self.surface.enabled:
-            rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad, queue_size=5, tcp_nodelay=True)
-            rospy.Subscriber("vehicle/gps/odom", Odometry, self.on_vehicle, queue_size=5, tcp_nodelay=True)
-            rospy.Subscriber("platform/current_platform_position_in_world", PointStamped, self.on_world_fix,
-                             queue_size=5, tcp_nodelay=True)
+            self.handles.subscriber("kalman_platform_odom", Odometry, self.on_pad, queue_size=5, tcp_nodelay=True)
+            self.handles.subscriber("vehicle/gps/odom", Odometry, self.on_vehicle, queue_size=5, tcp_nodelay=True)
+            self.handles.subscriber("platform/current_platform_position_in_world", PointStamped, self.on_world_fix,
+                                    queue_size=5, tcp_nodelay=True)
 
     def _new_estimator(self):
         return DroneEstimator(self.params, log=lambda line: rospy.loginfo("drone_estimator: %s", line),
@@ -311,9 +315,7 @@ class EstimatorNode:
 
 
 def estimator_main():
-    init_node("drone_estimator")
-    EstimatorNode()
-    spin()
+    return run_node("drone_estimator", EstimatorNode, startup_errors=(ParamError,), resettable=True)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -337,11 +339,16 @@ def build_prediction(path, odom):
 
 
 class TrackingNode:
+    """platform_tracking: ``tick()`` steps the state machine at ``rate_hz`` (sim time; ResettableNode drives it and
+    replaces the object at a ~reset); the callbacks only store their inputs."""
+
     def __init__(self):
         self.params = load_params(TrackingParams, check=True)
+        self.rate_hz = self.params.rate_hz
         self.lock = threading.Lock()
         self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
-        self.machine = TrackingStateMachine(self.params, logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
+        self.machine = TrackingStateMachine(self.params,
+                                            logger=lambda line: rospy.loginfo("platform_tracking: %s", line))
         self.estimate = None          # (stamp, DroneState without sonar)
         self.unseen = None            # (stamp, world xy, weight) of the vehicle's velocity the flow does not see
         self.flow_weight = WeightForecast()
@@ -355,6 +362,10 @@ class TrackingNode:
         self.landing_allowed = True
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.camera_latency = CameraLatency(DELAY_SAMPLES, LATENCY_PERIOD)  # of the detections' arrival
+        # A latency due for platform_tracking/camera_latency, published by the next tick: a callback publishing it
+        # while a reset builds the next object would latch the old scenario's value again.
+        self.latency_due = None
+        self.last_tick = None         # ROS time of the latest tick: a jump back starts the state machine over
         self.estimates = StateHistory(ESTIMATE_HISTORY, keep=2)  # odom_estimate's xy, to place fixes at their stamp
         self.relative = RelativeTrack(self.params.relative_fix_gain, self.params.relative_max_age,
                                       flow_lag=self.params.flow_time_lead)
@@ -364,24 +375,32 @@ class TrackingNode:
         self.pub_cmd = direct_publisher("ardrone/cmd_vel", Twist)
         self.pub_takeoff = rospy.Publisher("ardrone/takeoff", Empty, queue_size=1)
         self.pub_land = rospy.Publisher("ardrone/land", Empty, queue_size=1)
-        self.pub_state = rospy.Publisher("platform_tracking/state", String, queue_size=1, latch=True)
+        self.handles = NodeHandles()  # its subscribers and latched publishers, let go of at a reset
+        self.pub_state = self.handles.latched(rospy.Publisher("platform_tracking/state", String, queue_size=1,
+                                                              latch=True))
         self.pub_target = direct_publisher("platform_tracking/target", PointStamped)
         # What the link costs, for the operator and the bag: the along-track gain is bounded by it.
-        self.pub_latency = rospy.Publisher("platform_tracking/camera_latency", Float64, queue_size=1, latch=True)
-        rospy.Subscriber("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("kalman_prediction_path", Path, self.on_path, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/flow_unseen_velocity", Vector3Stamped, self.on_unseen, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
-        rospy.Subscriber("platform/current_platform_position_in_ardrone", PointStamped, self.on_detection, queue_size=5, tcp_nodelay=True)
-        rospy.Subscriber("platform/current_platform_position_in_world", PointStamped, self.on_world_fix, queue_size=5,
-                         tcp_nodelay=True)
-        rospy.Subscriber("platform_tracking/command", String, self.on_command, queue_size=10)
-        rospy.Subscriber("ardrone/takeoff", Empty, lambda m: self.on_thesis_request(m, "takeoff"), queue_size=5)
-        rospy.Subscriber("ardrone/land", Empty, lambda m: self.on_thesis_request(m, "land"), queue_size=5)
-        rospy.Subscriber("ardrone/force_land", Empty, lambda m: self.on_thesis_request(m, "force_land"), queue_size=5)
+        self.pub_latency = self.handles.latched(rospy.Publisher("platform_tracking/camera_latency", Float64,
+                                                                queue_size=1, latch=True))
+        subscribe = self.handles.subscriber
+        subscribe("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5, tcp_nodelay=True)
+        subscribe("kalman_prediction_path", Path, self.on_path, queue_size=5, tcp_nodelay=True)
+        subscribe("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5, tcp_nodelay=True)
+        subscribe("ardrone/navdata", Navdata, self.on_navdata, queue_size=5, tcp_nodelay=True)
+        subscribe("ardrone/flow_unseen_velocity", Vector3Stamped, self.on_unseen, queue_size=5, tcp_nodelay=True)
+        subscribe("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
+        subscribe("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
+        subscribe("platform/current_platform_position_in_ardrone", PointStamped, self.on_detection, queue_size=5,
+                  tcp_nodelay=True)
+        subscribe("platform/current_platform_position_in_world", PointStamped, self.on_world_fix, queue_size=5,
+                  tcp_nodelay=True)
+        subscribe("platform_tracking/command", String, self.on_command, queue_size=10)
+        subscribe("ardrone/takeoff", Empty, lambda m: self.on_thesis_request(m, "takeoff"), queue_size=5)
+        subscribe("ardrone/land", Empty, lambda m: self.on_thesis_request(m, "land"), queue_size=5)
+        subscribe("ardrone/force_land", Empty, lambda m: self.on_thesis_request(m, "force_land"), queue_size=5)
+        if self.params.autostart:
+            with self.lock:
+                self.requests.append("takeoff")  # taken by the first tick, once the clock runs
         self.pub_state.publish(String(data=self.machine.state.value))
 
     # ----- inputs ------------------------------------------------------------------------------
@@ -474,7 +493,7 @@ class TrackingNode:
         problem = sonar_problem(msg, BODY_FRAME)
         if problem:
             return self.rejections.reject("ardrone/sonar_height", problem)
-        valid = math.isfinite(msg.range) and msg.range < msg.max_range if msg.max_range > 0 else math.isfinite(msg.range)
+        valid = math.isfinite(msg.range) and (msg.range < msg.max_range if msg.max_range > 0 else True)
         with self.lock:
             self.sonar_ranges.append(float(msg.range) if valid else math.inf)
             median = sorted(self.sonar_ranges)[len(self.sonar_ranges) // 2]
@@ -492,7 +511,7 @@ class TrackingNode:
             self.seen_at = rospy.get_time()
             self.camera_latency.add(self.seen_at, msg.header.stamp.to_sec())
             if self.camera_latency.report_due(self.seen_at):
-                self.pub_latency.publish(Float64(data=self.camera_latency.value))
+                self.latency_due = self.camera_latency.value
 
     def on_landing_allowed(self, msg):
         with self.lock:
@@ -530,10 +549,28 @@ class TrackingNode:
             requests = requests[len(requests) - requests[::-1].index("hold"):]
         return requests
 
-    def step(self):
+    def tick(self):
+        """One step at the present ROS time; a jump back in time (a new simulation, a bag loop) starts the state
+        machine over first."""
         now = rospy.Time.now()
+        if self.last_tick is not None and now < self.last_tick:
+            self._start_over()
+        self.last_tick = now
+        self.step(now)
+
+    def _start_over(self):
+        rospy.logwarn("platform_tracking: time moved backwards; the state machine starts over")
+        with self.lock:
+            self.machine = TrackingStateMachine(self.params, self.machine.logger)
+            self.estimate = self.path = self.pad_odom = self.prediction = None
+            self.estimates.clear()
+            self.relative.reset()
+        self.pub_state.publish(String(data=State.LANDED.value))
+
+    def step(self, now):
         t = now.to_sec()
         with self.lock:
+            latency, self.latency_due = self.latency_due, None
             drone = None
             if self.estimate is not None and t - self.estimate[0] <= ESTIMATE_MAX_AGE:
                 state = self.estimate[1]
@@ -547,6 +584,8 @@ class TrackingNode:
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
                             vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight,
                             camera_latency=self.camera_latency.value, relative=self.relative.at(t))
+        if latency is not None:
+            self.pub_latency.publish(Float64(data=latency))
         before = self.machine.state
         out = self.machine.step(inputs)
         if out.send_takeoff:
@@ -568,28 +607,6 @@ class TrackingNode:
             self.pub_target.publish(target)
         self.lockstep.ack(now)
 
-    def spin(self):
-        wait_for_clock()
-        if self.params.autostart:
-            with self.lock:
-                self.requests.append("takeoff")
-        rate = rospy.Rate(self.params.rate_hz)
-        while not rospy.is_shutdown():
-            self.step()
-            try:
-                rate.sleep()
-            except rospy.ROSTimeMovedBackwardsException:
-                rospy.logwarn("platform_tracking: time moved backwards; the state machine starts over")
-                with self.lock:
-                    self.machine = TrackingStateMachine(self.params, self.machine.logger)
-                    self.estimate = self.path = self.pad_odom = self.prediction = None
-                    self.estimates.clear()
-                    self.relative.reset()
-                self.pub_state.publish(String(data=State.LANDED.value))
-            except rospy.ROSInterruptException:
-                break
-
 
 def tracking_main():
-    init_node("platform_tracking")
-    TrackingNode().spin()
+    return run_node("platform_tracking", TrackingNode, startup_errors=(ParamError,), resettable=True)
