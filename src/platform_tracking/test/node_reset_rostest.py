@@ -92,7 +92,8 @@ class NodeResetTest(unittest.TestCase):
                          queue_size=100)
         rospy.Subscriber("ardrone/odom_estimate", Odometry, cls.estimates.append, queue_size=200)
         rospy.Subscriber("platform_tracking/camera_latency", Float64, lambda m: cls.latencies.append(m.data))
-        cls.command = rospy.Publisher("platform_tracking/command", String, queue_size=10)  # not latched: see test 2
+        # Latched, as the supervisor's: what the tracker's connection received last must not reach a reset tracker.
+        cls.command = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
         cls.world = World()
         for name in (TRACKER, ESTIMATOR):
             rospy.wait_for_service(name + "/reset", timeout=WALL_TIMEOUT)
@@ -112,8 +113,9 @@ class NodeResetTest(unittest.TestCase):
         until = rospy.get_time() + seconds
         self.wait_for(lambda: rospy.get_time() >= until, "%.1f s of sim time" % seconds)
 
-    @staticmethod
-    def reset(node):
+    def reset(self, node):
+        # The supervisor, reset beside the tracker, forgets its latched command (a fresh one has none).
+        self.command.impl.latch = None
         return rospy.ServiceProxy(node + "/reset", Trigger)()
 
     def reset_ok(self, node):
@@ -199,7 +201,7 @@ class NodeResetTest(unittest.TestCase):
     def test_2_reset_nodes_start_afresh(self):
         self.assertEqual(self.state(), "TAKING_OFF")
         # The next scenario: the drone elsewhere, 25 m away (a running estimate would gate that fix), airborne
-        # still, the pad out of view. (No stale latched command reaches the tracker: the runner sees to that.)
+        # still, the pad out of view. (Its last latched command, "takeoff", must not reach the reset tracker.)
         self.world.detections, self.world.gps = False, P2
         reset_at = self.reset_ok(ESTIMATOR)
         states_before = len(self.states)

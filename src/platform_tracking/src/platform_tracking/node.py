@@ -394,7 +394,7 @@ class TrackingNode:
                   tcp_nodelay=True)
         subscribe("platform/current_platform_position_in_world", PointStamped, self.on_world_fix, queue_size=5,
                   tcp_nodelay=True)
-        subscribe("platform_tracking/command", String, self.on_command, queue_size=10)
+        subscribe("platform_tracking/command", String, self.on_command, queue_size=10, commands=True)
         subscribe("ardrone/takeoff", Empty, lambda m: self.on_thesis_request(m, "takeoff"), queue_size=5)
         subscribe("ardrone/land", Empty, lambda m: self.on_thesis_request(m, "land"), queue_size=5)
         subscribe("ardrone/force_land", Empty, lambda m: self.on_thesis_request(m, "force_land"), queue_size=5)
