@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""rostest of ~reset_world: a reset world flies as the fresh one did, ROS time goes on, parameters are read again.
+"""rostest of ~reset_world: a reset world flies as the fresh one did, ROS time goes on, parameters are read again;
+and of mujoco_sim/hold: the world stands until the next start.
 
 The drone starts hovering 2 m up in gusty wind (reset.test), with no command: everything it does then is seeded,
 so two flights of the same world must publish the same messages at the same times after their time 0."""
@@ -135,6 +136,25 @@ class ResetWorldTest(unittest.TestCase):
             self.assertIn(named, response.message)
         self.assertEqual(rospy.get_param("/mujoco_sim/model_file"), model_file)
         self.assertSameFlight(self.fly(), self.first_flight)
+
+    def test_5_a_hold_stops_the_world_until_the_next_start(self):
+        origin, truth = self.origin, self.received["/ardrone/ground_truth/state"]
+        hold = rospy.Publisher("/mujoco_sim/hold", Empty, queue_size=1)
+        testing.wait_for(lambda: hold.get_num_connections(), "the simulator on mujoco_sim/hold", WALL_TIMEOUT)
+        self.start.publish(Empty())
+        testing.wait_for(lambda: truth and truth[-1][0] >= origin + 1.0, "1 s of flight", WALL_TIMEOUT)
+        hold.publish(Empty())
+        # Held: the simulator publishes its clock again and again, unchanged, and nothing later than it.
+        ticks = len(self.clock)
+        testing.wait_for(lambda: len(self.clock) >= ticks + 10 and len(set(self.clock[-5:])) == 1,
+                         "the clock standing", WALL_TIMEOUT)
+        held, ticks = self.clock[-1], len(self.clock)
+        testing.wait_for(lambda: len(self.clock) >= ticks + 5, "5 more ticks of the held clock", WALL_TIMEOUT)
+        self.assertEqual(set(self.clock[ticks:]), {held})
+        self.assertLessEqual(truth[-1][0], held)
+        self.start.publish(Empty())
+        testing.wait_for(lambda: truth[-1][0] >= held + 0.5, "the flight going on after the start", WALL_TIMEOUT)
+        self.assertTrue(self.reset().success)
 
 
 if __name__ == "__main__":

@@ -4,11 +4,12 @@
 
 For each profile, one after the other on this machine: the simulator alone at full speed with a camera
 subscriber (`bench_sim`), then the whole landing graph on the scenario (`run_scenario`), which samples the
-CPU time of each of its nodes from /proc. Prints each real-time factor, their ratio, the fixed
-per-scenario overhead (start-up and shut-down, from result.json's wall_phases_s) and the CPU seconds per sim
-second of each node (on a loaded machine this moves less than the wall-clock figures); with --profile,
-py-spy's hottest functions of each Python node. Compare profiles only within one run of this command
-(machines and their load differ).
+CPU time of each of its nodes from /proc; then the scenario twice on one warm graph (`benchmark --warm`'s
+runner), the second time after a reset. Prints each real-time factor, their ratio, the fixed per-scenario
+overhead (start-up and shut-down, from result.json's wall_phases_s) of a fresh graph and of a reset one, and
+the CPU seconds per sim second of each node (on a loaded machine this moves less than the wall-clock
+figures); with --profile, py-spy's hottest functions of each Python node. Compare profiles only within one
+run of this command (machines and their load differ).
 """
 import argparse
 import collections
@@ -136,7 +137,30 @@ IDLE = re.compile(r"^(wait|_wait_for_tstate_lock|sleep|select|poll|accept|recv_i
                   r"spin|epoll)\b|threading.py|selectors.py|socket.py.*\breadinto")
 
 
-def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False):
+def measure_warm(scenario, out, profile, timeout):
+    """The scenario flown twice by one warm worker (run_pool.WarmWorker): on a fresh graph, then on the same graph
+    after its reset. Returns the second run's figures (as measure's), and the first's start-up."""
+    from .run_pool import WarmWorker
+    warm_dir = os.path.join(out, "warm")
+    worker = WarmWorker(sys.executable, warm_dir)
+    results = []
+    try:
+        for index in (1, 2):
+            run_dir = os.path.join(warm_dir, "run_%d" % index)
+            outcome = worker.run({"python": sys.executable, "file": scenario, "out_dir": run_dir, "realism": profile,
+                                  "log": os.path.join(warm_dir, "worker.log"), "wall_timeout": timeout})
+            results.append(((outcome or {}).get("result") or
+                            {"error": "the warm worker did not fly it; see %s" % os.path.join(warm_dir, "worker.log")}))
+    finally:
+        worker.close()
+    first, second = results
+    return {"loop_rtf": second.get("real_time_factor"), "outcome": second.get("outcome"),
+            "phases": second.get("wall_phases_s", {}), "steps": second.get("wall_steps_s", {}),
+            "reset": (second.get("graph") or {}).get("warm"), "error": second.get("error"),
+            "first_start_up": first.get("wall_phases_s", {}).get("start_up")}
+
+
+def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=True):
     sim = subprocess.run(["rosrun", "landing_eval", "bench_sim", "--json", "--realism", profile,
                           "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
                          capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
@@ -164,7 +188,7 @@ def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False):
             "loop_rtf": result.get("real_time_factor"), "outcome": result.get("outcome"),
             "phases": result.get("wall_phases_s", {}), "cpu": node_cpu_per_sim_second(result), "hot": hot,
             "steps": result.get("wall_steps_s", {}), "simulator": simulator_shares(result.get("bag") or ""),
-            "error": result.get("error")}
+            "error": result.get("error"), "warm": measure_warm(scenario, run_dir, profile, timeout) if warm else None}
 
 
 
@@ -176,6 +200,25 @@ def report(rows):
         print("| %s | %s | %s | %s | %s | %s | %s |" % (
             r["profile"], _f(r["sim_alone_rtf"]), _f(r["loop_rtf"]), _f(ratio), _f(r["phases"].get("start_up")),
             _f(r["phases"].get("shut_down")), r["outcome"]))
+    for r in rows:
+        w = r.get("warm")
+        if w:
+            ratio = w["loop_rtf"] / r["sim_alone_rtf"] if w["loop_rtf"] and r["sim_alone_rtf"] else None
+            print("| %s, graph reset%s | | %s | %s | %s | %s | %s |" % (
+                r["profile"], "" if w["reset"] else " (NOT: fresh)", _f(w["loop_rtf"]), _f(ratio),
+                _f(w["phases"].get("start_up")), _f(w["phases"].get("shut_down")), w["outcome"]))
+    for r in rows:
+        w = r.get("warm")
+        fresh = _overhead(r["phases"])
+        if w and fresh is not None and _overhead(w["phases"]) is not None:
+            print("per-scenario overhead (start-up + shut-down), %s: fresh graph %.2f s, reset graph %.2f s (%.0f %% "
+                  "less); the warm graph's own start-up, once per job: %s s" % (
+                      r["profile"], fresh, _overhead(w["phases"]), 100 * (1 - _overhead(w["phases"]) / fresh),
+                      _f(w["first_start_up"])))
+        if w and w.get("steps"):
+            print("start-up and shut-down steps after a reset, %s (wall s from the start): %s" % (
+                r["profile"], ", ".join("%s %.2f" % (k, v) for k, v in w["steps"].items()
+                                        if k not in ("flight", "clock_runs"))))
     for r in rows:
         if r.get("simulator"):
             print("simulator's wall time in the closed loop, %s: %s" % (r["profile"], ", ".join(
@@ -209,6 +252,12 @@ def report(rows):
                 print("  %5.1f %%  %s" % (100 * share, frame))
 
 
+def _overhead(phases):
+    if phases.get("start_up") is None or phases.get("shut_down") is None:
+        return None
+    return phases["start_up"] + phases["shut_down"]
+
+
 def _f(value, digits=2):
     return "-" if value is None else "%.*f" % (digits, value)
 
@@ -220,6 +269,7 @@ def main(argv=None):
     parser.add_argument("--profiles", default="ideal,realistic", help="comma-separated realism profiles")
     parser.add_argument("--sim-seconds", type=float, default=60.0, help="sim time of the simulator-alone run [s]")
     parser.add_argument("--timeout", type=float, default=900.0, help="wall-clock limit of each run [s]")
+    parser.add_argument("--no-warm", action="store_true", help="skip the runs on a warm graph")
     parser.add_argument("--profile", action="store_true", help="sample every Python node of the closed loop with "
                         "py-spy (slows the run: its RTF is not comparable) and print each one's hottest functions")
     args = parser.parse_args(argv)
@@ -229,8 +279,9 @@ def main(argv=None):
         print("bench_loop: unknown profile(s) %s (known: %s)" % (", ".join(unknown), ", ".join(PROFILES)), file=sys.stderr)
         return 2
     os.makedirs(args.out, exist_ok=True)
-    rows = [measure(args.scenario, args.out, p, args.sim_seconds, args.timeout, args.profile) for p in profiles]
+    rows = [measure(args.scenario, args.out, p, args.sim_seconds, args.timeout, args.profile, not args.no_warm)
+            for p in profiles]
     with open(os.path.join(args.out, "bench_loop.json"), "w") as stream:
         json.dump(rows, stream, indent=2)
     report(rows)
-    return 0 if all(r["loop_rtf"] for r in rows) else 1
+    return 0 if all(r["loop_rtf"] and (not r["warm"] or r["warm"]["loop_rtf"]) for r in rows) else 1

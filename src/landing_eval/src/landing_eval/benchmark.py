@@ -288,6 +288,9 @@ def main(argv=None):
                              "this path")
     parser.add_argument("--cpus-per-scenario", type=float, default=1.0,
                         help="CPUs a Ray task reserves (default 1): Ray runs as many at once on a node as it has CPUs")
+    parser.add_argument("--warm", action="store_true",
+                        help="keep each job's graph between its runs and reset it (docs/warm_graph.md) instead of "
+                             "starting one per run; a run that needs other nodes gets a graph of its own")
     parser.add_argument("--repeat", type=int, default=1, help="run each scenario this often and report the spread")
     parser.add_argument("--resume", action="store_true",
                         help="keep the rows of --out/results.csv and run only the runs it does not have yet")
@@ -303,6 +306,8 @@ def main(argv=None):
     unknown = [p for p in profiles if p not in ("ideal", "realistic", "harsh")] if args.realism else []
     if unknown:
         parser.error("--realism: unknown profile(s) %s (ideal, realistic, harsh)" % ", ".join(unknown))
+    if args.warm and args.ray:
+        parser.error("--warm runs on this machine only; leave out --ray or --warm")
     if args.repeat < 1 or args.jobs < 1 or args.cpus_per_scenario <= 0:
         parser.error("--repeat and --jobs must be >= 1 and --cpus-per-scenario > 0")
     files = collect(args.scenarios)
@@ -329,11 +334,15 @@ def main(argv=None):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     start = time.monotonic()
     executor = "Ray cluster %s, %g CPU a run" % (args.ray, args.cpus_per_scenario) if args.ray else \
-        "--jobs %d" % args.jobs
+        "--jobs %d%s" % (args.jobs, ", warm graphs" if args.warm else "")
     # a run's longest wall time: with nothing finished for twice that, the cluster is taken as gone
     idle_timeout = 2 * max([s["wall_timeout"] + run_pool.START_STOP_MARGIN_S for s in todo] or [0])
-    runs = run_pool.ray_runs(todo, args.ray, args.cpus_per_scenario, idle_timeout) if args.ray else \
-        run_pool.local_runs(todo, args.jobs)
+    if args.ray:
+        runs = run_pool.ray_runs(todo, args.ray, args.cpus_per_scenario, idle_timeout)
+    elif args.warm:
+        runs = run_pool.warm_local_runs(todo, args.jobs, os.path.join(args.out, "graphs"))
+    else:
+        runs = run_pool.local_runs(todo, args.jobs)
     try:
         with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       transient=False) as progress:

@@ -2,9 +2,11 @@
 
     rosrun landing_eval ray_scaling scenarios/stress/short_sweep --out /tmp/scaling [--configs local,ray,ray1,ray1+1]
     rosrun landing_eval ray_scaling scenarios/stress/short_sweep --out /tmp/jobs --configs local1,local2
+    rosrun landing_eval ray_scaling scenarios/stress/short_sweep --out /tmp/warm --configs local1,warm1,local2,warm2
 
-Configurations: ``local`` (benchmark --jobs CPUS), ``localN`` (benchmark --jobs N), ``ray`` (one Ray node with CPUS CPUs), ``rayA+B`` (a head
-with A CPUs and a second node, a separate ``ray start --address`` process, with B). Each is a whole
+Configurations: ``local`` (benchmark --jobs CPUS), ``localN`` (benchmark --jobs N), ``warmN`` (benchmark --jobs N
+--warm: each job's graph reset between its runs), ``ray`` (one Ray node with CPUS CPUs), ``rayA+B`` (a head with A
+CPUs and a second node, a separate ``ray start --address`` process, with B). Each is a whole
 ``rosrun landing_eval benchmark`` command, timed from start to exit (connecting to Ray included), with its
 results in OUT/CONFIG. Prints a table: wall time, runs passed, and where the runs went. On one machine a
 second node adds no cores: ``ray1+1`` against ``ray1`` shows that tasks spread over the nodes and that a
@@ -38,6 +40,8 @@ def run_config(config, scenarios, out_root, cpus):
     out = os.path.join(out_root, config.replace("+", "_"))
     if config.startswith("local"):
         return sweep(scenarios, out, ["--jobs", config[5:] or str(cpus)])
+    if config.startswith("warm"):
+        return sweep(scenarios, out, ["--jobs", config[4:], "--warm"])
     sizes = [int(n) for n in config[3:].split("+")] if config[3:] else [cpus]
     with RayNode(num_cpus=sizes[0]) as head:
         nodes = [RayNode(num_cpus=n, address=head.address) for n in sizes[1:]]
@@ -60,8 +64,9 @@ def main(argv=None):
     configs = [c.strip() for c in args.configs.split(",") if c.strip()]
     for config in configs:
         if config not in ("local", "ray") and not (config.startswith("local") and config[5:].isdigit()) and not (
+                config.startswith("warm") and config[4:].isdigit()) and not (
                 config.startswith("ray") and all(p.isdigit() for p in config[3:].split("+"))):
-            parser.error("unknown configuration %r (local, localN, ray, rayA+B...)" % config)
+            parser.error("unknown configuration %r (local, localN, warmN, ray, rayA+B...)" % config)
     os.makedirs(args.out, exist_ok=True)
     lines = ["| configuration | wall [s] | passed | exit | runs per node | throughput against the first |",
              "|---|---|---|---|---|---|"]
@@ -70,6 +75,7 @@ def main(argv=None):
         code, wall, rows = run_config(config, args.scenarios, args.out, args.cpus)
         per_node = collections.Counter(r.get("node") or "-" for r in rows)
         label = "local --jobs %s" % (config[5:] or args.cpus) if config.startswith("local") else \
+            "local --jobs %s --warm" % config[4:] if config.startswith("warm") else \
             "Ray, %s CPU" % (config[3:] or str(args.cpus)).replace("+", " + ")
         rate = len(rows) / wall if wall > 0 else 0.0  # runs per wall second
         first_rate = rate if first_rate is None else first_rate

@@ -2,8 +2,9 @@
 cluster whose machines all have the workspace built at the same path.
 
 Either way one run is ``execute_run(spec)``: ``python -m landing_eval.runner_cli`` in a subprocess under its
-own ROS master, on the machine that runs it. The pools yield ``(spec, outcome)`` as runs finish; the
-caller turns each outcome into a results row (benchmark.row_of)."""
+own ROS master, on the machine that runs it. Locally the runs can also fly on warm graphs (warm_local_runs): a
+WarmWorker process per job slot keeps its graph and resets it between runs. The pools yield ``(spec, outcome)``
+as runs finish; the caller turns each outcome into a results row (benchmark.row_of)."""
 import json
 import os
 import shutil
@@ -83,12 +84,8 @@ def node_name():
     return name
 
 
-def execute_run(spec):
-    """One run of a scenario on this machine. ``spec``: ``python`` (interpreter of the workspace's venv),
-    ``file`` (scenario path) and ``scenario_text`` (its YAML, written beside the run's output, so that a node
-    need not have the file), ``out_dir``, ``log`` (path of the runner's output), ``wall_timeout`` (flight's
-    wall limit [s]), ``realism`` (a profile replacing the scenario's, or None) and ``env`` (environment overrides, or None). Returns ``{"returncode", "result",
-    "node", "failure"}``: ``result`` is result.json's content, or None with ``failure`` saying why."""
+def _prepare(spec):
+    """Check the interpreter, clear the run's directory and write its scenario there; returns the scenario's path."""
     python = spec["python"]
     if not os.access(python, os.X_OK):
         raise RuntimeError("%s has no %s: every machine of the cluster needs the workspace built at the same path "
@@ -100,34 +97,14 @@ def execute_run(spec):
         scenario_path = os.path.join(out_dir, "scenario.yaml")
         with open(scenario_path, "w") as stream:
             stream.write(spec["scenario_text"])
-    command = [python, "-m", "landing_eval.runner_cli", scenario_path, "--out", out_dir,
-               "--wall-timeout", str(spec["wall_timeout"])]
-    if spec.get("realism"):
-        command += ["--realism", spec["realism"]]
-    env = dict(os.environ, **spec["env"]) if spec.get("env") else None
-    outcome = {"returncode": None, "result": None, "node": node_name(), "failure": None}
-    with open(spec["log"], "w") as log:
-        process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env,
-                                   preexec_fn=_prepare_child)
-        with _Running.lock:
-            _Running.processes.add(process)
-        try:
-            outcome["returncode"] = process.wait(timeout=spec["wall_timeout"] + START_STOP_MARGIN_S)
-        except subprocess.TimeoutExpired:
-            process.send_signal(signal.SIGINT)
-            try:
-                process.wait(timeout=STOP_GRACE_S)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
-            outcome["failure"] = "run_scenario did not finish within %.0f s" % (
-                spec["wall_timeout"] + START_STOP_MARGIN_S)
-        finally:
-            with _Running.lock:
-                _Running.processes.discard(process)
+    return scenario_path
+
+
+def _collect(spec, outcome):
+    """``outcome`` with the run's result.json read in (or ``failure`` saying why there is none)."""
     # run_scenario writes result.json whatever happened to the run (an aborted one says why); without it the run
     # failed before its scenario was read, or was killed.
-    result_file = os.path.join(out_dir, "result.json")
+    result_file = os.path.join(spec["out_dir"], "result.json")
     if os.path.isfile(result_file):
         try:
             with open(result_file) as stream:
@@ -144,6 +121,169 @@ def execute_run(spec):
     if outcome["result"] is not None and outcome["failure"]:
         outcome["result"]["error"] = "; ".join(filter(None, [outcome["result"].get("error"), outcome["failure"]]))
     return outcome
+
+
+def _stop(process):
+    """SIGINT, then SIGKILL after STOP_GRACE_S."""
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout=STOP_GRACE_S)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+def execute_run(spec):
+    """One run of a scenario on this machine. ``spec``: ``python`` (interpreter of the workspace's venv),
+    ``file`` (scenario path) and ``scenario_text`` (its YAML, written beside the run's output, so that a node
+    need not have the file), ``out_dir``, ``log`` (path of the runner's output), ``wall_timeout`` (flight's
+    wall limit [s]), ``realism`` (a profile replacing the scenario's, or None) and ``env`` (environment overrides, or None). Returns ``{"returncode", "result",
+    "node", "failure"}``: ``result`` is result.json's content, or None with ``failure`` saying why."""
+    scenario_path = _prepare(spec)
+    command = [spec["python"], "-m", "landing_eval.runner_cli", scenario_path, "--out", spec["out_dir"],
+               "--wall-timeout", str(spec["wall_timeout"])]
+    if spec.get("realism"):
+        command += ["--realism", spec["realism"]]
+    env = dict(os.environ, **spec["env"]) if spec.get("env") else None
+    outcome = {"returncode": None, "result": None, "node": node_name(), "failure": None}
+    with open(spec["log"], "w") as log:
+        process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env,
+                                   preexec_fn=_prepare_child)
+        with _Running.lock:
+            _Running.processes.add(process)
+        try:
+            outcome["returncode"] = process.wait(timeout=spec["wall_timeout"] + START_STOP_MARGIN_S)
+        except subprocess.TimeoutExpired:
+            _stop(process)
+            outcome["failure"] = "run_scenario did not finish within %.0f s" % (
+                spec["wall_timeout"] + START_STOP_MARGIN_S)
+        finally:
+            with _Running.lock:
+                _Running.processes.discard(process)
+    return _collect(spec, outcome)
+
+
+class WarmWorker:
+    """A landing_eval.warm_worker process: the scenarios given to it fly one after another on one warm graph.
+    ``log_dir``: its graph's logs and its own output (worker.log)."""
+
+    def __init__(self, python, log_dir, env=None):
+        import queue
+        os.makedirs(log_dir, exist_ok=True)
+        self.log_dir = log_dir
+        self._log = open(os.path.join(log_dir, "worker.log"), "w")
+        self.process = subprocess.Popen([python, "-m", "landing_eval.warm_worker", "--log-dir", log_dir],
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._log, text=True,
+                                        env=env, preexec_fn=_prepare_child)
+        with _Running.lock:
+            _Running.processes.add(self.process)
+        self.replies = queue.Queue()
+        threading.Thread(target=self._read, name="warm_worker_replies", daemon=True).start()
+
+    def _read(self):
+        from .warm_worker import REPLY_MARKER
+        for line in self.process.stdout:
+            if line.startswith(REPLY_MARKER):
+                self.replies.put(json.loads(line[len(REPLY_MARKER):]))
+            else:
+                self._log.write(line)
+        self.replies.put(None)  # (the worker ended)
+
+    def run(self, spec):
+        """Fly ``spec`` (as execute_run's); returns its outcome, or None when the worker cannot fly it (another
+        graph is needed, or the worker ended) and it must go to a fresh worker."""
+        import queue
+        scenario_path = _prepare(spec)
+        outcome = {"returncode": None, "result": None, "node": node_name(), "failure": None}
+        request = {"scenario": scenario_path, "out_dir": spec["out_dir"], "wall_timeout": spec["wall_timeout"],
+                   "realism": spec.get("realism")}
+        try:
+            self.process.stdin.write(json.dumps(request) + "\n")
+            self.process.stdin.flush()
+        except (BrokenPipeError, ValueError):  # (the worker has ended)
+            return None
+        try:
+            answer = self.replies.get(timeout=spec["wall_timeout"] + START_STOP_MARGIN_S)
+        except queue.Empty:
+            self.close()
+            outcome["failure"] = "the warm worker did not finish the run within %.0f s" % (
+                spec["wall_timeout"] + START_STOP_MARGIN_S)
+            return _collect(spec, outcome)
+        if answer is None or answer.get("status") == "mismatch":
+            return None
+        if answer.get("status") != "done":
+            outcome["failure"] = "the warm worker refused the run: %s" % answer.get("reason")
+        return _collect(spec, outcome)
+
+    def close(self):
+        """End the worker (its graph stops); bounded by STOP_GRACE_S, then SIGKILL."""
+        try:
+            self.process.stdin.close()
+        except OSError:
+            pass
+        try:
+            self.process.wait(timeout=STOP_GRACE_S)
+        except subprocess.TimeoutExpired:
+            _stop(self.process)
+        with _Running.lock:
+            _Running.processes.discard(self.process)
+        self._log.close()
+
+
+def warm_local_runs(specs, jobs, log_root):
+    """Yields (spec, outcome) as the runs finish, ``jobs`` at a time on this machine, each job slot flying its runs
+    on a warm graph (a WarmWorker; another one for a run that needs other nodes). Logs of the graphs: ``log_root``."""
+    import queue
+    pending, finished = queue.Queue(), queue.Queue()
+    for spec in specs:
+        pending.put(spec)
+    counter = iter(range(1, 1 << 30))
+    stop = threading.Event()
+
+    def slot():
+        worker = None
+        try:
+            while not stop.is_set():
+                try:
+                    spec = pending.get_nowait()
+                except queue.Empty:
+                    return
+                outcome = None
+                for _attempt in range(2):  # the present worker, then a fresh one
+                    if worker is None:
+                        if stop.is_set():
+                            break
+                        worker = WarmWorker(spec["python"], os.path.join(log_root, "worker_%d" % next(counter)))
+                    outcome = worker.run(spec)
+                    if outcome is not None:
+                        break
+                    worker.close()
+                    worker = None
+                if outcome is None:
+                    outcome = {"returncode": None, "result": None, "node": node_name(), "failure":
+                               "a fresh warm worker could not fly the run either; see %s" % log_root}
+                finished.put((spec, outcome))
+        finally:
+            if worker is not None:
+                worker.close()
+            finished.put(None)
+
+    threads = [threading.Thread(target=slot, name="warm_slot_%d" % i, daemon=True) for i in range(max(1, jobs))]
+    for thread in threads:
+        thread.start()
+    running = len(threads)
+    try:
+        while running:
+            item = finished.get()
+            if item is None:
+                running -= 1
+            else:
+                yield item
+    finally:
+        stop.set()
+        _Running.stop_all()
+        for thread in threads:
+            thread.join()
 
 
 def local_runs(specs, jobs):

@@ -35,6 +35,7 @@ SHUT_DOWN_WALL_S = 60.0         # stopping the recorder and the launch (20 s eac
 # question costs the processes coming up CPU on a machine the start-up already fills. 4 interleaved runs each:
 # start-up 2.93-3.27 s polling every 0.02 s, 2.42-2.73 s every 0.1 s (0.05 s and 0.2 s: 2.66-2.97 s).
 GRAPH_POLL_S = 0.1
+WARM_GRAPH_POLL_S = 0.02  # the same on a warm graph, whose nodes are up and idle: nothing to slow down [s]
 CLOCK_STALL_WALL_S = 30.0       # the sim clock standing still this long after the start: the simulator is gone [s]
 MODE_WAIT_S = 30.0              # sim seconds a next mission waits for the supervisor to be back on the ground
 # Sim seconds between setting a mission's conditions (a fresh battery) and choosing the landing mode: the master
@@ -164,17 +165,22 @@ class Recorders:
 class FlightMonitor:
     """Watches a run from inside the graph and decides when it is over (ROS-bound part of the runner)."""
 
-    def __init__(self, s, ros, recorders, core):
+    def __init__(self, s, ros, recorders, core, origin=0.0, poll_s=GRAPH_POLL_S):
         import rosgraph
         import rospy
         from geometry_msgs.msg import PoseStamped
         from landing_msgs.msg import PositionXYCommand, Touchdown
         from std_msgs.msg import String
         self.rospy, self.s, self.ros, self.recorders, self.core = rospy, s, ros, recorders, core
-        # rospy picks its clock at init_node: set /use_sim_time here rather than race roslaunch setting it,
-        # or the runner may count wall time and end the flight at once.
-        rosgraph.Master("/scenario_runner").setParam("/use_sim_time", True)
-        rospy.init_node("scenario_runner", disable_signals=True)
+        # The world's time 0 in ROS time [s]: 0 on a fresh graph; on a warm graph the ROS time of its reset. Every
+        # time this monitor reports or compares is world time (clock(), world_time()).
+        self.origin, self.poll_s = origin, poll_s
+        if not rospy.core.is_initialized():  # (a warm graph's next scenario: this process is in the graph already)
+            # rospy picks its clock at init_node: set /use_sim_time here rather than race roslaunch setting it,
+            # or the runner may count wall time and end the flight at once.
+            rosgraph.Master("/scenario_runner").setParam("/use_sim_time", True)
+            rospy.init_node("scenario_runner", disable_signals=True)
+        self.subscribers = []
         self.touchdown, self.touchdown_wall = None, None
         # Ground-truth poses by stamp: drone and pad are published in the same simulator step, and only
         # samples of one instant may be compared (the pad moves up to 25 m/s).
@@ -194,7 +200,10 @@ class FlightMonitor:
         self._recorder_restart = None  # (new recorder, sim time) until it has subscribed again
         self.faults = faults.FaultInjector(rospy, self.process_roots)
         # Each topic is read from the node that owns it only: a scenario may publish garbage on it (fuzz:).
-        sim, sub = "/mujoco_sim", rospy.Subscriber
+        sim = "/mujoco_sim"
+
+        def sub(*args, **kwargs):
+            self.subscribers.append(rospy.Subscriber(*args, **kwargs))
         sub("ardrone/touchdown", Touchdown, only_from(sim, self._on_touchdown))
         # Ground truth from the start (not once the drone is down): a subscription made later would need the master,
         # which may be dead by then (kill_node master), and rospy then waits for it for ever.
@@ -207,10 +216,29 @@ class FlightMonitor:
             "/emergency", lambda m: setattr(self, "emergency_position", [round(m.x, 3), round(m.y, 3)])))
         sub("supervisor/decisions", String, only_from("/supervisor", self._on_decision))
         from rosgraph_msgs.msg import Log
-        rospy.Subscriber("rosout_agg", Log, self._on_log, queue_size=1000)
+        sub("rosout_agg", Log, self._on_log, queue_size=1000)
         self.operator = rospy.Publisher("operator/command", String, queue_size=10, latch=True)
         self.tracker_command = rospy.Publisher("platform_tracking/command", String, queue_size=10, latch=True)
         self.fault = rospy.Publisher("mujoco_sim/fault", String, queue_size=10)
+        from std_msgs.msg import Empty
+        self.holder = rospy.Publisher("mujoco_sim/hold", Empty, queue_size=1)
+
+    def clock(self):
+        """World time [s]: ROS time since the world's time 0."""
+        return self.rospy.get_time() - self.origin
+
+    def world_time(self, stamp):
+        """World time [s] of a ROS stamp."""
+        return stamp.to_sec() - self.origin
+
+    def close(self):
+        """Leave the scenario without leaving the graph (a warm graph's next scenario gets a monitor of its own):
+        unsubscribe, and forget the latched operator and tracker commands, which the reset nodes must not get."""
+        self.faults.close()
+        for subscriber in self.subscribers:
+            subscriber.unregister()
+        for publisher in (self.operator, self.tracker_command):
+            publisher.impl.latch = None
 
     def process_roots(self):
         """Pids whose process trees hold this run's nodes: the master's, the launch and the flight recorder."""
@@ -231,6 +259,8 @@ class FlightMonitor:
             decision = json.loads(msg.data)
         except ValueError:
             return
+        if isinstance(decision, dict) and isinstance(decision.get("t"), (int, float)):
+            decision["t"] = round(decision["t"] - self.origin, 3)  # (the supervisor's t is ROS time)
         self.decisions.append(decision)
         if decision.get("action") == "emergency_landing":
             self.emergency_ordered = True
@@ -238,7 +268,7 @@ class FlightMonitor:
 
     def _on_log(self, msg):
         if msg.level >= msg.WARN and self.s.get("fuzz"):  # (sim time: the nodes throttle their warnings on their clock)
-            self.warnings.append((round(msg.header.stamp.to_sec(), 3), msg.name, msg.msg))
+            self.warnings.append((round(self.world_time(msg.header.stamp), 3), msg.name, msg.msg))
         if msg.level >= msg.ERROR and msg.msg.startswith(CALLBACK_EXCEPTION):
             seen = self.callback_errors.setdefault(msg.name, {"count": 0, "first": msg.msg[-600:]})
             seen["count"] += 1
@@ -256,14 +286,14 @@ class FlightMonitor:
         supervision = ["/supervisor/mode", "/emergency/state", "/cmd_vel_mux/selected"]
         return (stack if self.s.get("_needs_tracker") else []) + (supervision if self.s.get("_supervisor") else [])
 
-    def _wait(self, condition, what, deadline, poll_s=GRAPH_POLL_S):
+    def _wait(self, condition, what, deadline, poll_s=None):
         while not condition():
             if not self.ros.alive():
                 raise RuntimeError("%s: roslaunch exited with code %s (%s)" % (
                     what, self.ros.process.returncode, launch_failure(self.ros.log_path)))
             if time.monotonic() > deadline:
                 raise TimeoutError("%s within the time allowed (tracker state %r)" % (what, self.tracker_state))
-            time.sleep(poll_s)
+            time.sleep(poll_s or self.poll_s)
 
     def wait_for_graph(self, deadline):
         """Until every needed topic is advertised and the landing stack (if any) reports its state."""
@@ -323,10 +353,16 @@ class FlightMonitor:
         start = self.rospy.Publisher("mujoco_sim/start", Empty, queue_size=1, latch=True)
         start.publish(Empty())
         # (polled closely: sim time runs from here, and the scenario's events at t = 0 must not wait for the poll)
-        self._wait(lambda: self.rospy.get_time() > 0.0, "the simulator did not start", deadline, poll_s=0.005)
+        self._wait(lambda: self.clock() > 0.0, "the simulator did not start", deadline, poll_s=0.005)
+
+    def hold(self):
+        """Hold the world (mujoco_sim/hold) once the flight is over: on a warm graph, which flies on otherwise, the
+        nodes then rest while the recorder stops."""
+        from std_msgs.msg import Empty
+        self.holder.publish(Empty())
 
     def sample_resources(self, label, wall_start):
-        return self.resources.sample(label, time.monotonic() - wall_start, self.rospy.get_time(),
+        return self.resources.sample(label, time.monotonic() - wall_start, self.clock(),
                                      processes.nodes_below(self.process_roots()))
 
     # ----- events ----------------------------------------------------------------------------------
@@ -346,7 +382,7 @@ class FlightMonitor:
     def apply(self, event):
         from std_msgs.msg import String
         rospy = self.rospy
-        t = rospy.get_time()
+        t = self.clock()
         rospy.loginfo("scenario event at t=%.2f: %s", t, event)
         if "operator" in event:
             action = event["operator"]
@@ -369,9 +405,9 @@ class FlightMonitor:
     def _settled(self, since):
         """The latest touchdown after sim time ``since``, once the drone has rested on it (or crashed)."""
         touchdown = self.touchdown
-        if touchdown is None or touchdown.header.stamp.to_sec() <= since:
+        if touchdown is None or self.world_time(touchdown.header.stamp) <= since:
             return None
-        touchdown_time = touchdown.header.stamp.to_sec()
+        touchdown_time = self.world_time(touchdown.header.stamp)
         # After an emergency landing, wait for the coordinates the emergency module reports.
         ordered = self.missions.current["emergency_ordered"] if self.missions.current else self.emergency_ordered
         settle = EMERGENCY_REPORT_WAIT_S if ordered and self.emergency_position is None else SETTLE_AFTER_TOUCHDOWN_S
@@ -383,8 +419,8 @@ class FlightMonitor:
         """Raises GraphFailure when the launch ended or the clock stopped; notes a lost master."""
         if not self.ros.alive():
             raise GraphFailure("roslaunch ended with code %s at t=%.2f s: %s" % (
-                self.ros.process.returncode, self.rospy.get_time(), launch_failure(self.ros.log_path)))
-        t, now = self.rospy.get_time(), time.monotonic()
+                self.ros.process.returncode, self.clock(), launch_failure(self.ros.log_path)))
+        t, now = self.clock(), time.monotonic()
         if t > clock["t"]:
             clock.update(t=t, wall=now)
         elif now - clock["wall"] > CLOCK_STALL_WALL_S:
@@ -432,7 +468,7 @@ class FlightMonitor:
             return
         if registered and all("/" + RECORDER in subscribers.get(t, []) for t in self._needed_topics()):
             self._recorder_restart = None
-            self.faults.mark_recovered(RECORDER, self.rospy.get_time(), "subscribed to every needed topic")
+            self.faults.mark_recovered(RECORDER, self.clock(), "subscribed to every needed topic")
 
     def _next_mission(self, plan, t):
         """Before the next mission: the operator acknowledges an emergency report, then once the supervisor is
@@ -470,14 +506,14 @@ class FlightMonitor:
         """The flight until its last mission ended, the time limit, or the wall deadline (TimeoutError); raises
         GraphFailure when the graph fell apart."""
         rospy = self.rospy
-        sim_start = rospy.get_time()
+        sim_start = self.clock()
         plan = self.s.get("missions")
-        clock = {"t": rospy.get_time(), "wall": time.monotonic()}
+        clock = {"t": self.clock(), "wall": time.monotonic()}
         self.faults.prepare([e["name"] for e in schedule.pending if e.get("fault") == "kill_node"])
         self._pause_end = None  # sim time the next mission may start
         self._conditions_set = None  # (sim time, conditions, battery swapped) of the next mission, once set
         while True:
-            t = rospy.get_time()
+            t = self.clock()
             for event in schedule.due(t):
                 self.apply(event)
             self._check_graph(clock)
@@ -519,14 +555,14 @@ class FlightMonitor:
 
     def _latest_common_pose_time(self):
         stamp = self._latest_common_stamp()
-        return float("-inf") if stamp is None else stamp.to_sec()
+        return float("-inf") if stamp is None else self.world_time(stamp)
 
     def scored(self, error, aborted, sim_start, sim_time, flight_wall):
         """The result.json fields of the flight (SPEC section 7) from what was seen; ``error``: why the run
         was cut short, or None; ``aborted``: the graph fell apart."""
         touchdown, resting_error = self.touchdown, self.resting_pad_error()
         outcome, touchdown_error = scoring.outcome(touchdown, resting_error, self.emergency_ordered)
-        touchdown_time = touchdown.header.stamp.to_sec() if touchdown else None
+        touchdown_time = self.world_time(touchdown.header.stamp) if touchdown else None
         records = self.missions.records
         if self.s.get("missions"):
             outcome = missions_mod.worst(r["outcome"] for r in records) if records else "timeout"
@@ -641,11 +677,14 @@ def repair_bags(bags, timeout=30.0):
     return repaired
 
 
-def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None, split_s=None):
+def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None, split_s=None,
+        warm=None):
     """Run one scenario (in the realism profile ``realism`` if given, else the scenario's); returns the
     result dict (also written to out_dir/result.json, whatever happens after the scenario file was read).
     ``split_s``: a new bag every split_s seconds of sim time (0: one bag; None: RECORDER_SPLIT_S for a run
-    whose time limit is over LONG_RUN_S)."""
+    whose time limit is over LONG_RUN_S). ``warm``: a warm_graph.WarmGraph: the scenario flies on its graph after
+    a reset (the first one starts it), and the graph is left running; raises warm_graph.GraphMismatch, before
+    anything is written, when the scenario needs other nodes than that graph runs."""
     s = scenario_mod.load(scenario_path, realism)
     s["_needs_tracker"] = landing_stack
     s["_supervisor"] = supervisor and landing_stack
@@ -658,6 +697,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
               "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s) + \
         (["station:=true"] if s["fuzz"] else [])  # garbage reaches the operator station's inputs too
+    config = warm.check_fits(launch) if warm is not None else None
     wall_start = time.monotonic()
     limits = wall_limits(s["time_limit_s"], wall_timeout)
     result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path),
@@ -670,31 +710,50 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     def step(name):
         steps[name] = round(time.monotonic() - wall_start, 3)
     monitor, recorders, core, ros = None, None, None, None
+    # Waits for this process to have left the graph, once the launch and the recorder have ended and before
+    # the master stops (the stack unwinds in reverse order). (Not on a warm graph: this process stays in it.)
+    leaving = []
+
+    def left_graph():
+        for finish in leaving:
+            finish()
+            step("left_graph")
+    start_deadline = wall_start + limits["start_up"]
+
+    def start_graph(stack, log_dir):
+        # The master in a process tree of its own: one roslaunch started would end the whole graph with it.
+        core = stack.enter_context(IsolatedCore(os.path.join(log_dir, "core.log")))
+        if warm is None:
+            stack.callback(left_graph)
+        os.environ["ROS_MASTER_URI"] = core.master_uri
+        # The launch starts beside the master and waits for it (roslaunch --wait).
+        ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(log_dir, "launch.log"), port=core.port))
+        core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
+        return core, ros
+    origin = 0.0  # the world's time 0 in ROS time [s]
     try:
         with contextlib.ExitStack() as stack:
-            # The master in a process tree of its own: one roslaunch started would end the whole graph with it.
-            core = stack.enter_context(IsolatedCore(os.path.join(out_dir, "core.log")))
-            # Waits for this process to have left the graph, once the launch and the recorder have ended and before
-            # the master stops (the stack unwinds in reverse order).
-            leaving = []
-
-            def left_graph():
-                for finish in leaving:
-                    finish()
-                    step("left_graph")
-            stack.callback(left_graph)
-            os.environ["ROS_MASTER_URI"] = core.master_uri
-            start_deadline = wall_start + limits["start_up"]
-            # The launch starts beside the master and waits for it (roslaunch --wait).
-            ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(out_dir, "launch.log"), port=core.port))
-            core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
+            if warm is None:
+                core, ros = start_graph(stack, out_dir)
+            elif warm.started:
+                core, ros = warm.core, warm.ros
+                origin = warm.reset(config)
+                step("reset")
+            else:
+                core, ros = warm.start(config, start_graph)
+            if warm is not None:
+                result["graph"] = warm.describe()
             step("master")
             if split_s is None:
                 split_s = RECORDER_SPLIT_S if s["time_limit_s"] > LONG_RUN_S else 0
             recorders = Recorders(out_dir, ros.master_uri, stack, split_s)
-            monitor = FlightMonitor(s, ros, recorders, core)
+            monitor = FlightMonitor(s, ros, recorders, core, origin,
+                                    WARM_GRAPH_POLL_S if warm is not None and warm.resets else GRAPH_POLL_S)
+            if warm is not None:
+                stack.callback(monitor.close)  # (after the recorder has stopped: the stack unwinds in reverse)
             monitor.wait_for_graph(start_deadline)
             step("graph")
+
             monitor.wait_for_recorder(recorders.start(), start_deadline)
             step("recorder")
             monitor.wait_for_connections(start_deadline)
@@ -713,7 +772,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             step("sampled")
             monitor.release(start_deadline)
             step("clock_runs")
-            sim_start = monitor.rospy.get_time()
+            sim_start = monitor.clock()
             wall_flight_start = time.monotonic()
             phases["start_up"] = wall_flight_start - wall_start
             error, aborted = None, False
@@ -724,26 +783,36 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             except GraphFailure as err:
                 error, aborted = str(err), True
                 monitor.missions.abandon("aborted")
-            sim_time = monitor.rospy.get_time()
+            sim_time = monitor.clock()
             phases["flight"] = time.monotonic() - wall_flight_start
             if time.monotonic() - wall_start - monitor.resources.samples[-1]["wall_s"] > 5.0:
                 monitor.sample_resources("end", wall_start)  # (a mission that just ended has its own sample)
+            if warm is not None:
+                monitor.hold()
             # The result needs neither the bag nor the graph any more: they stop side by side while it is
             # scored and this process leaves the graph.
             # (The master stops last, when the stack unwinds: nodes unregister from it as they stop.)
-            for process in ([fuzzer] if fuzzer else []) + ([recorders.current] if recorders.current else []) + [ros]:
+            for process in ([fuzzer] if fuzzer else []) + ([recorders.current] if recorders.current else []) + \
+                    ([ros] if warm is None else []):
                 process.interrupt()
             step("flight")
             result.update(monitor.scored(error, aborted, sim_start, sim_time, phases["flight"]))
             step("scored")
             if fuzzer is not None:
                 result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
-            leaving.append(monitor.start_leaving_graph())
+            if warm is None:
+                leaving.append(monitor.start_leaving_graph())
+            elif aborted:
+                warm.close()  # (the graph fell apart: the next scenario needs another runner process)
     except Exception as err:  # noqa: BLE001 (whatever went wrong, the run leaves its result and the reason)
         # The graph never came up (or the run could not even start): still a result, with the reason.
+        if warm is not None:
+            warm.close()  # (in whatever state it is, it serves no other scenario)
         result.update(outcome="aborted", error="%s: %s" % (type(err).__name__, err), touchdown_error_m=None,
                       time_to_land_s=None, decisions=monitor.decisions if monitor else [])
     except KeyboardInterrupt as err:
+        if warm is not None:
+            warm.close()
         result.update(outcome="aborted", error="%s (%s)" % (INTERRUPTED, err or "Ctrl-C"), touchdown_error_m=None,
                       time_to_land_s=None, decisions=monitor.decisions if monitor else [])
         if monitor is not None and monitor.missions.records:  # the missions flown so far, for a soak's report
@@ -765,9 +834,11 @@ def finish(result, out_dir, wall_start, phases, monitor, recorders, steps=None):
     if monitor is not None:
         result["resources"] = {"samples": monitor.resources.samples, "table": monitor.resources.table(
             baseline=1 if len(monitor.resources.samples) > 3 else 0)}
+    graph = result.get("graph") or {}  # (a warm graph's launch log: this scenario's part of it)
     try:
-        with open(os.path.join(out_dir, "launch.log"), errors="replace") as stream:
-            result["node_deaths"] = processes.deaths_in_launch_log(stream.read())
+        with open(graph.get("launch_log") or os.path.join(out_dir, "launch.log"), "rb") as stream:
+            stream.seek(graph.get("launch_log_offset", 0))
+            result["node_deaths"] = processes.deaths_in_launch_log(stream.read().decode(errors="replace"))
     except OSError:
         result["node_deaths"] = []
     result["wall_time_s"] = round(time.monotonic() - wall_start, 2)

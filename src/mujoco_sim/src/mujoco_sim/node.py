@@ -210,6 +210,7 @@ class SimNode:
         rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
         rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
         rospy.Subscriber("mujoco_sim/start", Empty, self._on_start, queue_size=1)
+        rospy.Subscriber("mujoco_sim/hold", Empty, self._on_hold, queue_size=1)
         rospy.Subscriber("mujoco_sim/fault", String, self._on_fault, queue_size=10)
         self._listen_to_acknowledgements()
 
@@ -225,6 +226,13 @@ class SimNode:
     def _on_start(self, _msg):
         self.start_received = True
         self.wake.set()
+
+    def _on_hold(self, _msg):
+        """mujoco_sim/hold (with wait_for_start): hold the physics and the clock after the present step, until the
+        next mujoco_sim/start. A warm graph's runner holds the world once a flight is over, so that the graph stops
+        working while the flight's recorder stops (docs/warm_graph.md)."""
+        if self.wait_for_start:
+            self.start_received = False
 
     def _on_reset_world(self, _request):
         """~reset_world (std_srvs/Trigger): served by the loop between two physics steps; the caller waits."""
@@ -352,7 +360,7 @@ class SimNode:
 
     def _step_and_publish(self, max_sim_time):
         """Step and publish until rospy shuts down or sim time reaches ``max_sim_time`` (False), or a reset_world
-        request comes (True)."""
+        request or a hold comes (True)."""
         rtf = self.cfg["real_time_factor"]
         wall_start, sim_start = time.monotonic(), self.sim.time
         viewer = self._open_viewer() if self.viewer_requested else None
@@ -361,7 +369,7 @@ class SimNode:
         self.wall_start, self.sim_start = wall_start, sim_start
         try:
             while not rospy.is_shutdown():
-                if not self.reset_requests.empty():
+                if not self.reset_requests.empty() or (self.wait_for_start and not self.start_received):
                     return True
                 while not self.actions.empty():
                     self.actions.get()()
