@@ -63,6 +63,6 @@ def test_a_process_never_starts_a_second_graph(tmp_path):
     with pytest.raises(RuntimeError, match="no master"):
         graph.start(config, fails)
     with pytest.raises(warm_graph.GraphMismatch, match="gone"):
-        graph.check_fits(_launch(SCENARIO))
+        graph.check_fits(config)
     with pytest.raises(warm_graph.GraphMismatch, match="one graph only"):
         graph.start(config, fails)

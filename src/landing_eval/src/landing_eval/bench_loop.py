@@ -4,8 +4,8 @@
 
 For each profile, one after the other on this machine: the simulator alone at full speed with a camera
 subscriber (`bench_sim`), then the whole landing graph on the scenario (`run_scenario`), which samples the
-CPU time of each of its nodes from /proc; then the scenario twice on one warm graph (`benchmark --warm`'s
-runner), the second time after a reset. Prints each real-time factor, their ratio, the fixed per-scenario
+CPU time of each of its nodes from /proc; then the scenario three times on one warm graph as `benchmark --warm`
+flies a sweep, each after the first on the reset graph. Prints each real-time factor, their ratio, the fixed per-scenario
 overhead (start-up and shut-down, from result.json's wall_phases_s) of a fresh graph and of a reset one, and
 the CPU seconds per sim second of each node (on a loaded machine this moves less than the wall-clock
 figures); with --profile, py-spy's hottest functions of each Python node. Compare profiles only within one
@@ -137,27 +137,33 @@ IDLE = re.compile(r"^(wait|_wait_for_tstate_lock|sleep|select|poll|accept|recv_i
                   r"spin|epoll)\b|threading.py|selectors.py|socket.py.*\breadinto")
 
 
-def measure_warm(scenario, out, profile, timeout):
-    """The scenario flown twice by one warm worker (run_pool.WarmWorker): on a fresh graph, then on the same graph
-    after its reset. Returns the second run's figures (as measure's), and the first's start-up."""
+def measure_warm(scenario, out, profile, timeout, runs=3):
+    """The scenario flown ``runs`` times by one warm worker (run_pool.WarmWorker) as in a warm sweep: the first on a
+    fresh graph, each next one on the same graph after its reset, started while the previous run's recorder stops.
+    Returns the last run's figures (as measure's), the first's start-up, and what the sweep spent between the last
+    two flights (from the release of the one before to the release of the last, less the flight)."""
     from .run_pool import WarmWorker
     warm_dir = os.path.join(out, "warm")
     worker = WarmWorker(sys.executable, warm_dir)
-    results = []
+    specs = [{"python": sys.executable, "file": scenario, "out_dir": os.path.join(warm_dir, "run_%d" % index),
+              "realism": profile, "log": os.path.join(warm_dir, "worker.log"), "wall_timeout": timeout}
+             for index in range(1, runs + 1)]
     try:
-        for index in (1, 2):
-            run_dir = os.path.join(warm_dir, "run_%d" % index)
-            outcome = worker.run({"python": sys.executable, "file": scenario, "out_dir": run_dir, "realism": profile,
-                                  "log": os.path.join(warm_dir, "worker.log"), "wall_timeout": timeout})
-            results.append(((outcome or {}).get("result") or
-                            {"error": "the warm worker did not fly it; see %s" % os.path.join(warm_dir, "worker.log")}))
+        outcomes = worker.run_all(specs)
     finally:
         worker.close()
-    first, second = results
-    return {"loop_rtf": second.get("real_time_factor"), "outcome": second.get("outcome"),
-            "phases": second.get("wall_phases_s", {}), "steps": second.get("wall_steps_s", {}),
-            "reset": (second.get("graph") or {}).get("warm"), "error": second.get("error"),
-            "first_start_up": first.get("wall_phases_s", {}).get("start_up")}
+    missing = {"error": "the warm worker did not fly it; see %s" % os.path.join(warm_dir, "worker.log")}
+    results = [((outcome or {}).get("result") or missing) for outcome in outcomes]
+    first, before, last = results[0], results[-2], results[-1]
+    between = None
+    try:
+        between = last["graph"]["released_at_s"] - before["graph"]["released_at_s"] - before["wall_phases_s"]["flight"]
+    except (KeyError, TypeError):
+        pass
+    return {"loop_rtf": last.get("real_time_factor"), "outcome": last.get("outcome"),
+            "phases": last.get("wall_phases_s", {}), "steps": last.get("wall_steps_s", {}),
+            "reset": (last.get("graph") or {}).get("warm"), "error": last.get("error"),
+            "first_start_up": first.get("wall_phases_s", {}).get("start_up"), "between_flights": between}
 
 
 def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=True):
@@ -212,9 +218,10 @@ def report(rows):
         fresh = _overhead(r["phases"])
         if w and fresh is not None and _overhead(w["phases"]) is not None:
             print("per-scenario overhead (start-up + shut-down), %s: fresh graph %.2f s, reset graph %.2f s (%.0f %% "
-                  "less); the warm graph's own start-up, once per job: %s s" % (
+                  "less); in a warm sweep, between two flights (the recorder of one stopping beside the reset for the "
+                  "next): %s s; the warm graph's own start-up, once per job: %s s" % (
                       r["profile"], fresh, _overhead(w["phases"]), 100 * (1 - _overhead(w["phases"]) / fresh),
-                      _f(w["first_start_up"])))
+                      _f(w["between_flights"]), _f(w["first_start_up"])))
         if w and w.get("steps"):
             print("start-up and shut-down steps after a reset, %s (wall s from the start): %s" % (
                 r["profile"], ", ".join("%s %.2f" % (k, v) for k, v in w["steps"].items()

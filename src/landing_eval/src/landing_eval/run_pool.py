@@ -164,8 +164,9 @@ def execute_run(spec):
 
 
 class WarmWorker:
-    """A landing_eval.warm_worker process: the scenarios given to it fly one after another on one warm graph.
-    ``log_dir``: its graph's logs and its own output (worker.log)."""
+    """A landing_eval.warm_worker process: the scenarios given to it fly one after another on one warm graph, the
+    next one's reset beside the previous one's recorder stopping. ``log_dir``: its graph's logs and its own output
+    (worker.log)."""
 
     def __init__(self, python, log_dir, env=None):
         import queue
@@ -177,46 +178,70 @@ class WarmWorker:
                                         env=env, preexec_fn=_prepare_child)
         with _Running.lock:
             _Running.processes.add(self.process)
-        self.replies = queue.Queue()
-        threading.Thread(target=self._read, name="warm_worker_replies", daemon=True).start()
+        self.answers = queue.Queue()
+        self.reader = threading.Thread(target=self._read, name="warm_worker_replies", daemon=True)
+        self.reader.start()
 
     def _read(self):
         from .warm_worker import REPLY_MARKER
         for line in self.process.stdout:
             if line.startswith(REPLY_MARKER):
-                self.replies.put(json.loads(line[len(REPLY_MARKER):]))
+                self.answers.put(json.loads(line[len(REPLY_MARKER):]))
             else:
                 self._log.write(line)
-        self.replies.put(None)  # (the worker ended)
+        self.answers.put(None)  # (the worker ended)
 
-    def run(self, spec):
-        """Fly ``spec`` (as execute_run's); returns its outcome, or None when the worker cannot fly it (another
-        graph is needed, or the worker ended) and it must go to a fresh worker."""
-        import queue
+    def send(self, spec):
+        """Give the worker ``spec`` (as execute_run's); False when it has ended."""
         scenario_path = _prepare(spec)
-        outcome = {"returncode": None, "result": None, "node": node_name(), "failure": None}
         request = {"scenario": scenario_path, "out_dir": spec["out_dir"], "wall_timeout": spec["wall_timeout"],
                    "realism": spec.get("realism")}
         try:
             self.process.stdin.write(json.dumps(request) + "\n")
             self.process.stdin.flush()
-        except (BrokenPipeError, ValueError):  # (the worker has ended)
-            return None
+        except (BrokenPipeError, ValueError):
+            return False
+        return True
+
+    def answer(self, timeout):
+        """The worker's next answer (warm_worker's replies), None once it has ended; raises queue.Empty after
+        ``timeout`` seconds without one."""
+        return self.answers.get(timeout=timeout)
+
+    def run_all(self, specs):
+        """Fly ``specs`` one after another as a warm sweep does, and wait for their outcomes (as
+        execute_run's, in order; None for a run the worker could not fly: another graph was needed, or it ended)."""
+        import queue
+        outcomes, waiting = {}, list(specs)
+        timeout = max([s["wall_timeout"] for s in specs] or [0.0]) + START_STOP_MARGIN_S
+        ahead, sent = 0, set()  # (one run flying, the next read ahead: see warm_worker)
         try:
-            answer = self.replies.get(timeout=spec["wall_timeout"] + START_STOP_MARGIN_S)
+            while len(outcomes) < len(specs):
+                while ahead < 2 and waiting:
+                    spec = waiting.pop(0)
+                    if not self.send(spec):
+                        break
+                    sent.add(spec["out_dir"])
+                    ahead += 1
+                answer = self.answer(timeout)
+                if answer is None:
+                    break
+                if answer.get("status") == "ready":
+                    ahead -= 1
+                elif answer.get("out_dir") in sent:
+                    spec = next(s for s in specs if s["out_dir"] == answer["out_dir"])
+                    outcomes[spec["out_dir"]] = None if answer["status"] == "mismatch" else _outcome_of(spec, answer)
         except queue.Empty:
             self.close()
-            outcome["failure"] = "the warm worker did not finish the run within %.0f s" % (
-                spec["wall_timeout"] + START_STOP_MARGIN_S)
-            return _collect(spec, outcome)
-        if answer is None or answer.get("status") == "mismatch":
-            return None
-        if answer.get("status") != "done":
-            outcome["failure"] = "the warm worker refused the run: %s" % answer.get("reason")
-        return _collect(spec, outcome)
+            for spec in specs:
+                if spec["out_dir"] in sent and spec["out_dir"] not in outcomes:
+                    outcomes[spec["out_dir"]] = _collect(spec, _outcome(
+                        "the warm worker did not finish the run within %.0f s" % timeout))
+        return [outcomes.get(s["out_dir"]) for s in specs]
 
     def close(self):
-        """End the worker (its graph stops); bounded by STOP_GRACE_S, then SIGKILL."""
+        """End the worker once its runs have their results (its graph stops); bounded by STOP_GRACE_S, then SIGKILL.
+        Its answers stay readable (answer) until the None that marks its end."""
         try:
             self.process.stdin.close()
         except OSError:
@@ -225,9 +250,20 @@ class WarmWorker:
             self.process.wait(timeout=STOP_GRACE_S)
         except subprocess.TimeoutExpired:
             _stop(self.process)
+        self.reader.join(timeout=STOP_GRACE_S)
         with _Running.lock:
             _Running.processes.discard(self.process)
         self._log.close()
+
+
+def _outcome(failure=None):
+    return {"returncode": None, "result": None, "node": node_name(), "failure": failure}
+
+
+def _outcome_of(spec, answer):
+    """The outcome of ``spec`` from the worker's final answer about it (done or error)."""
+    failure = None if answer.get("status") == "done" else "the warm worker refused the run: %s" % answer.get("reason")
+    return _collect(spec, _outcome(failure))
 
 
 def warm_local_runs(specs, jobs, log_root):
@@ -241,31 +277,68 @@ def warm_local_runs(specs, jobs, log_root):
     stop = threading.Event()
 
     def slot():
-        worker = None
+        worker, flying = None, {}  # the worker, and its runs sent and not finished, by out_dir
+        retry, retried = [], set()  # runs a worker could not fly (another graph needed), for a fresh worker, once
+
+        def settle(spec, answer):
+            if answer.get("status") == "mismatch" and spec["out_dir"] not in retried:
+                retried.add(spec["out_dir"])
+                retry.append(spec)
+            elif answer.get("status") == "mismatch":
+                finished.put((spec, _outcome("a fresh warm worker could not fly the run either: %s"
+                                             % answer.get("reason"))))
+            else:
+                finished.put((spec, _outcome_of(spec, answer)))
+
+        def retire():
+            """End the worker once it has flown what it was given; every run of it is settled."""
+            worker.close()
+            while True:
+                answer = worker.answers.get()
+                if answer is None:
+                    break
+                if answer.get("out_dir") in flying:
+                    settle(flying.pop(answer["out_dir"]), answer)
+            for spec in flying.values():
+                finished.put((spec, _collect(spec, _outcome("the warm worker ended without its result; see %s"
+                                                            % worker.log_dir))))
+            flying.clear()
         try:
+            ahead = 0  # runs sent that have not left the graph yet: one flying, one read ahead
             while not stop.is_set():
-                try:
-                    spec = pending.get_nowait()
-                except queue.Empty:
-                    return
-                outcome = None
-                for _attempt in range(2):  # the present worker, then a fresh one
-                    if worker is None:
-                        if stop.is_set():
+                while ahead < 2:
+                    spec = retry.pop(0) if retry else None
+                    if spec is None:
+                        try:
+                            spec = pending.get_nowait()
+                        except queue.Empty:
                             break
+                    if worker is None:
                         worker = WarmWorker(spec["python"], os.path.join(log_root, "worker_%d" % next(counter)))
-                    outcome = worker.run(spec)
-                    if outcome is not None:
+                    flying[spec["out_dir"]] = spec
+                    if not worker.send(spec):
                         break
-                    worker.close()
-                    worker = None
-                if outcome is None:
-                    outcome = {"returncode": None, "result": None, "node": node_name(), "failure":
-                               "a fresh warm worker could not fly the run either; see %s" % log_root}
-                finished.put((spec, outcome))
+                    ahead += 1
+                if not flying:
+                    return
+                timeout = max(s["wall_timeout"] for s in flying.values()) + START_STOP_MARGIN_S
+                try:
+                    answer = worker.answer(timeout)
+                except queue.Empty:
+                    answer = None  # (a worker that answers nothing for that long is ended)
+                status = (answer or {}).get("status")
+                if answer is None or status == "mismatch":
+                    if answer is not None:
+                        settle(flying.pop(answer["out_dir"]), answer)
+                    retire()
+                    worker, ahead = None, 0
+                elif status == "ready":
+                    ahead -= 1
+                elif answer.get("out_dir") in flying:
+                    settle(flying.pop(answer["out_dir"]), answer)
         finally:
             if worker is not None:
-                worker.close()
+                retire()
             finished.put(None)
 
     threads = [threading.Thread(target=slot, name="warm_slot_%d" % i, daemon=True) for i in range(max(1, jobs))]

@@ -26,6 +26,7 @@ from . import missions as missions_mod
 from . import processes
 from . import scenario as scenario_mod
 from . import scoring
+from . import warm_graph
 
 SETTLE_AFTER_TOUCHDOWN_S = 1.0  # sim seconds the drone must rest before the outcome is read
 EMERGENCY_REPORT_WAIT_S = 4.0   # sim seconds to wait for emergency/position after an emergency touchdown
@@ -180,7 +181,7 @@ class FlightMonitor:
             # or the runner may count wall time and end the flight at once.
             rosgraph.Master("/scenario_runner").setParam("/use_sim_time", True)
             rospy.init_node("scenario_runner", disable_signals=True)
-        self.subscribers = []
+        self.subscribers, self.closed = [], False
         self.touchdown, self.touchdown_wall = None, None
         # Ground-truth poses by stamp: drone and pad are published in the same simulator step, and only
         # samples of one instant may be compared (the pad moves up to 25 m/s).
@@ -234,6 +235,9 @@ class FlightMonitor:
     def close(self):
         """Leave the scenario without leaving the graph (a warm graph's next scenario gets a monitor of its own):
         unsubscribe, and forget the latched operator and tracker commands, which the reset nodes must not get."""
+        if self.closed:
+            return
+        self.closed = True
         self.faults.close()
         for subscriber in self.subscribers:
             subscriber.unregister()
@@ -677,28 +681,37 @@ def repair_bags(bags, timeout=30.0):
     return repaired
 
 
+def plan(scenario_path, realism=None, landing_stack=True, supervisor=True):
+    """The scenario of ``scenario_path`` as run() flies it, and the roslaunch arguments of its graph: (s, launch).
+    Raises scenario.ScenarioError."""
+    s = scenario_mod.load(scenario_path, realism)
+    s["_needs_tracker"] = landing_stack
+    s["_supervisor"] = supervisor and landing_stack
+    launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
+              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s) + \
+        (["station:=true"] if s["fuzz"] else [])  # garbage reaches the operator station's inputs too
+    return s, launch
+
+
 def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None, split_s=None,
-        warm=None):
+        warm=None, on_flown=None, launch_config=None):
     """Run one scenario (in the realism profile ``realism`` if given, else the scenario's); returns the
     result dict (also written to out_dir/result.json, whatever happens after the scenario file was read).
     ``split_s``: a new bag every split_s seconds of sim time (0: one bag; None: RECORDER_SPLIT_S for a run
     whose time limit is over LONG_RUN_S). ``warm``: a warm_graph.WarmGraph: the scenario flies on its graph after
     a reset (the first one starts it), and the graph is left running; raises warm_graph.GraphMismatch, before
-    anything is written, when the scenario needs other nodes than that graph runs."""
-    s = scenario_mod.load(scenario_path, realism)
-    s["_needs_tracker"] = landing_stack
-    s["_supervisor"] = supervisor and landing_stack
+    anything is written, when the scenario needs other nodes than that graph runs. ``on_flown()``: called on a warm
+    graph once the flight is scored and the graph free for the next scenario, while the recorder still stops.
+    ``launch_config``: roslaunch's configuration of the scenario's graph (warm_graph.launch_config), if read ahead."""
+    wall_start = time.monotonic()
+    s, launch = plan(scenario_path, realism, landing_stack, supervisor)
+    config = warm.check_fits(launch_config or warm_graph.launch_config(launch)) if warm is not None else None
     os.makedirs(out_dir, exist_ok=True)
     # Without an operator event the operator chooses the landing mode at once, unless the scenario tests
     # what happens when nobody chooses (supervisor: {no_operator: true}).
     no_operator = bool(s["supervisor"].get("no_operator"))
     events = s["events"] if no_operator or any("operator" in e for e in s["events"]) else \
         [{"at_s": 0.0, "operator": "landing"}] + s["events"]
-    launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
-              "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s) + \
-        (["station:=true"] if s["fuzz"] else [])  # garbage reaches the operator station's inputs too
-    config = warm.check_fits(launch) if warm is not None else None
-    wall_start = time.monotonic()
     limits = wall_limits(s["time_limit_s"], wall_timeout)
     result = {"name": s["name"], "seed": s["seed"], "scenario": os.path.abspath(scenario_path),
               "realism": {"profile": s["realism"]["profile"], "overrides": s["realism"]["overrides"],
@@ -802,8 +815,14 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
                 result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
             if warm is None:
                 leaving.append(monitor.start_leaving_graph())
-            elif aborted:
-                warm.close()  # (the graph fell apart: the next scenario needs another runner process)
+            else:
+                if aborted:
+                    warm.close()  # (the graph fell apart: the next scenario needs another runner process)
+                monitor.close()
+                # (time.monotonic() of this process: what a warm sweep spends between two flights)
+                result["graph"]["released_at_s"] = round(wall_flight_start, 3)
+                if on_flown is not None:
+                    on_flown()
     except Exception as err:  # noqa: BLE001 (whatever went wrong, the run leaves its result and the reason)
         # The graph never came up (or the run could not even start): still a result, with the reason.
         if warm is not None:

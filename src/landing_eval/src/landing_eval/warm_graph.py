@@ -94,10 +94,9 @@ class WarmGraph:
         self.resets = 0             # resets so far: the scenarios flown on the graph after its first
         self.gone = None            # why the graph was closed, if it was
 
-    def check_fits(self, launch_args):
-        """roslaunch's configuration of ``launch_args``, if this process can fly it: no graph yet, or one that
-        runs the same nodes and can be reset. Raises GraphMismatch otherwise."""
-        config = launch_config(launch_args)
+    def check_fits(self, config):
+        """``config`` (launch_config's), if this process can fly it: no graph yet, or one that runs the same nodes
+        and can be reset. Raises GraphMismatch otherwise."""
         if not self.started:
             return config
         if self.gone:
@@ -119,10 +118,15 @@ class WarmGraph:
         self.started = True
         os.makedirs(self.log_dir, exist_ok=True)
         stack = contextlib.ExitStack()
+        # The master and the launch are started from a thread that lives as long as the graph: the kernel stops
+        # them when the thread that started them ends (isolated_ros.signal_on_parent_death), and a run's thread
+        # ends with its run.
+        self._keeper = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="warm_graph")
         try:
-            self.core, self.ros = start_graph(stack, self.log_dir)
+            self.core, self.ros = self._keeper.submit(start_graph, stack, self.log_dir).result()
         except BaseException:
             stack.close()
+            self._keeper.shutdown(wait=False)
             self.gone = "it did not start"
             raise
         self.stack, self.signature, self.nodes = stack, node_signature(config), node_names(config)
@@ -201,3 +205,4 @@ class WarmGraph:
             self.ros.__exit__(None, None, None)
             leaving.join(LEAVE_GRAPH_S)
             stack.close()
+            self._keeper.shutdown(wait=False)
