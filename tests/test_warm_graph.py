@@ -1,11 +1,13 @@
 """A reset graph flies like a fresh one (issue 15, docs/warm_graph.md), for real: one small suite through
 `benchmark --warm --jobs 1` (one graph, reset between the runs) and through `benchmark --jobs 1` (a graph per run).
 
-The suite is ordered so that each reset must clear something: a landing, then an emergency landing (battery 10 %
-in flight) on a world with another seed and wind, then a landing on a vehicle twice as fast, after which a graph
-that kept the supervisor's emergency, the tracker's mission, the vehicle's path or the runner's latched operator
-command would not land. The runs cannot match exactly (thread interleaving differs from run to run even on a fresh
-graph): outcomes must be equal, touchdown errors and landing times close."""
+The suite is ordered so that each reset must clear something: a landing; then critical wind (13 m/s: no take-off)
+after the calm, which a reset that kept the previous wind anywhere, or a runner that took the previous flight's
+touchdown for this one, gets wrong; an emergency landing (battery 10 % in flight) on a world with another seed and
+wind; then a landing on a vehicle twice as fast, after which a graph that kept the supervisor's emergency, the
+tracker's mission, the vehicle's path or the runner's latched operator command would not land. The runs cannot
+match exactly (thread interleaving differs from run to run even on a fresh graph): outcomes must be equal,
+touchdown errors and landing times close."""
 import csv
 import json
 import os
@@ -46,9 +48,10 @@ def _benchmark(suite_list, out, warm):
 def test_a_reset_graph_flies_the_suite_as_fresh_graphs_do(tmp_path):
     suite = {
         "1_circle": _scenario("1_circle", "summit_circle_1ms.yaml"),
-        "2_battery": _scenario("2_battery", "adverse_battery_10_in_flight.yaml", seed=7,
+        "2_wind": _scenario("2_wind", "stress/short_sweep/short_wind_13_a.yaml", seed=5),
+        "3_battery": _scenario("3_battery", "adverse_battery_10_in_flight.yaml", seed=7,
                                conditions__wind_speed=3.0, conditions__wind_direction_deg=90.0),
-        "3_faster": _scenario("3_faster", "summit_circle_1ms.yaml", seed=11, platform__speed_mps=2.0),
+        "4_faster": _scenario("4_faster", "summit_circle_1ms.yaml", seed=11, platform__speed_mps=2.0),
     }
     for name, s in suite.items():
         (tmp_path / (name + ".yaml")).write_text(yaml.safe_dump(s))
@@ -58,7 +61,7 @@ def test_a_reset_graph_flies_the_suite_as_fresh_graphs_do(tmp_path):
     warm_rows, warm = _benchmark(suite_list, tmp_path / "warm", warm=True)
     fresh_rows, fresh = _benchmark(suite_list, tmp_path / "fresh", warm=False)
 
-    assert [warm[n]["graph"]["warm"] for n in suite] == [False, True, True], {n: warm[n]["graph"] for n in suite}
+    assert [warm[n]["graph"]["warm"] for n in suite] == [False, True, True, True], {n: warm[n]["graph"] for n in suite}
     assert all("graph" not in fresh[n] for n in suite)
     for name in suite:
         assert warm_rows[name]["passed"] == "True" and fresh_rows[name]["passed"] == "True", (warm_rows, fresh_rows)
@@ -67,18 +70,21 @@ def test_a_reset_graph_flies_the_suite_as_fresh_graphs_do(tmp_path):
         # decisions are in the world's time on either graph, from its time 0 on
         assert all(d["t"] >= 0.0 for d in warm[name]["decisions"]), warm[name]["decisions"][:3]
         assert warm[name]["sim_time_s"] < 2 * fresh[name]["sim_time_s"] + 5.0
-    for name in ("1_circle", "3_faster"):
+    for name in ("1_circle", "4_faster"):
         assert abs(warm[name]["touchdown_error_m"] - fresh[name]["touchdown_error_m"]) < 0.15, name
         assert abs(warm[name]["time_to_land_s"] - fresh[name]["time_to_land_s"]) < 5.0, name
-    assert [d["condition"] for d in warm["2_battery"]["decisions"] if d.get("action") == "emergency_landing"] == \
+    assert warm["2_wind"]["touchdown"] is None and \
+        {"condition": "wind_critical", "action": "no_go"} in [
+            {"condition": d["condition"], "action": d["action"]} for d in warm["2_wind"]["decisions"]]
+    assert [d["condition"] for d in warm["3_battery"]["decisions"] if d.get("action") == "emergency_landing"] == \
         ["drone_battery_critical"]
 
     # The reset graph saves the start of the master and nodes.
-    for name in ("2_battery", "3_faster"):
+    for name in ("2_wind", "3_battery", "4_faster"):
         assert warm[name]["wall_phases_s"]["start_up"] < fresh[name]["wall_phases_s"]["start_up"], name
 
     # Each run has a bag of its own that holds its flight from its first sim-second, and the faster vehicle's.
-    bag = pathlib.Path(warm["3_faster"]["bag"])
+    bag = pathlib.Path(warm["4_faster"]["bag"])
     first = first_recorded(bag, {"/groundtruth/ardrone", "/ardrone/navdata", "/ardrone/odom_estimate", "/tf",
                                  "/groundtruth/landing_pad"})
     assert len(first) == 5 and max(first.values()) - min(first.values()) < 0.5, first

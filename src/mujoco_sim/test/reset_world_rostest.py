@@ -156,6 +156,20 @@ class ResetWorldTest(unittest.TestCase):
         testing.wait_for(lambda: truth[-1][0] >= held + 0.5, "the flight going on after the start", WALL_TIMEOUT)
         self.assertTrue(self.reset().success)
 
+    def test_6_a_reset_takes_the_conditions_set_just_before_it(self):
+        # The simulator has the condition parameters cached (the master pushes changes, about 60 ms late): a reset
+        # right after a runner set new ones must take the master's, not write the previous world's back over them.
+        original = rospy.get_param("/wind_speed")
+        rospy.set_param("/wind_speed", original + 2.0)
+        try:
+            self.assertTrue(self.reset().success)
+            self.assertEqual(rospy.get_param("/wind_speed"), original + 2.0)
+            self.fly()
+            self.assertEqual(rospy.get_param("/wind_speed"), original + 2.0)
+        finally:
+            rospy.set_param("/wind_speed", original)
+        self.assertTrue(self.reset().success)
+
 
 if __name__ == "__main__":
     rostest.rosrun("mujoco_sim", "reset_world", ResetWorldTest)

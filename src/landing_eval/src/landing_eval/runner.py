@@ -19,6 +19,8 @@ import sys
 import threading
 import time
 
+from landing_msgs.rospy_node import NodeHandles
+
 from .isolated_ros import IsolatedCore, IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
 
 from . import faults
@@ -166,22 +168,25 @@ class Recorders:
 class FlightMonitor:
     """Watches a run from inside the graph and decides when it is over (ROS-bound part of the runner)."""
 
-    def __init__(self, s, ros, recorders, core, origin=0.0, poll_s=GRAPH_POLL_S):
+    def __init__(self, s, ros, recorders, core, reused=False):
         import rosgraph
         import rospy
         from geometry_msgs.msg import PoseStamped
         from landing_msgs.msg import PositionXYCommand, Touchdown
         from std_msgs.msg import String
         self.rospy, self.s, self.ros, self.recorders, self.core = rospy, s, ros, recorders, core
-        # The world's time 0 in ROS time [s]: 0 on a fresh graph; on a warm graph the ROS time of its reset. Every
-        # time this monitor reports or compares is world time (clock(), world_time()).
-        self.origin, self.poll_s = origin, poll_s
+        # ``reused``: the graph flew a scenario before and is about to be reset for this one.
+        self.poll_s = WARM_GRAPH_POLL_S if reused else GRAPH_POLL_S
         if not rospy.core.is_initialized():  # (a warm graph's next scenario: this process is in the graph already)
             # rospy picks its clock at init_node: set /use_sim_time here rather than race roslaunch setting it,
             # or the runner may count wall time and end the flight at once.
             rosgraph.Master("/scenario_runner").setParam("/use_sim_time", True)
             rospy.init_node("scenario_runner", disable_signals=True)
-        self.subscribers, self.closed = [], False
+        # The world's time 0 in ROS time [s]: 0 on a fresh graph; on a reused one the ROS time of its reset (set by
+        # the runner once it is known; until then the present, before which nothing belongs to this scenario).
+        # Every time this monitor reports or compares is world time (clock(), world_time()).
+        self.origin = rospy.get_time() if reused else 0.0
+        self.handles, self.closed = NodeHandles(), False
         self.touchdown, self.touchdown_wall = None, None
         # Ground-truth poses by stamp: drone and pad are published in the same simulator step, and only
         # samples of one instant may be compared (the pad moves up to 25 m/s).
@@ -204,7 +209,8 @@ class FlightMonitor:
         sim = "/mujoco_sim"
 
         def sub(*args, **kwargs):
-            self.subscribers.append(rospy.Subscriber(*args, **kwargs))
+            # (on a reused graph, what the previous scenario latched is forgotten: see NodeHandles.subscriber)
+            self.handles.subscriber(*args, commands=reused, **kwargs)
         sub("ardrone/touchdown", Touchdown, only_from(sim, self._on_touchdown))
         # Ground truth from the start (not once the drone is down): a subscription made later would need the master,
         # which may be dead by then (kill_node master), and rospy then waits for it for ever.
@@ -239,8 +245,7 @@ class FlightMonitor:
             return
         self.closed = True
         self.faults.close()
-        for subscriber in self.subscribers:
-            subscriber.unregister()
+        self.handles.close()
         for publisher in (self.operator, self.tracker_command):
             publisher.impl.latch = None
 
@@ -255,6 +260,8 @@ class FlightMonitor:
                 poses.popitem(last=False)
 
     def _on_touchdown(self, msg):
+        if self.world_time(msg.header.stamp) < 0.0:
+            return  # (a previous world's, latched)
         if self.touchdown is None or msg.header.stamp.to_sec() > self.touchdown.header.stamp.to_sec():
             self.touchdown = msg
 
@@ -743,27 +750,29 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
         ros = stack.enter_context(IsolatedLaunch(launch, os.path.join(log_dir, "launch.log"), port=core.port))
         core.wait_for_master(timeout=max(1.0, start_deadline - time.monotonic()))
         return core, ros
-    origin = 0.0  # the world's time 0 in ROS time [s]
     try:
         with contextlib.ExitStack() as stack:
+            reused = warm is not None and warm.started  # (a warm graph flown before: reset for this scenario)
             if warm is None:
                 core, ros = start_graph(stack, out_dir)
-            elif warm.started:
+            elif reused:
                 core, ros = warm.core, warm.ros
-                origin = warm.reset(config)
-                step("reset")
             else:
                 core, ros = warm.start(config, start_graph)
-            if warm is not None:
-                result["graph"] = warm.describe()
-            step("master")
             if split_s is None:
                 split_s = RECORDER_SPLIT_S if s["time_limit_s"] > LONG_RUN_S else 0
             recorders = Recorders(out_dir, ros.master_uri, stack, split_s)
-            monitor = FlightMonitor(s, ros, recorders, core, origin,
-                                    WARM_GRAPH_POLL_S if warm is not None and warm.resets else GRAPH_POLL_S)
+            # On a reused graph the monitor subscribes before the nodes are reset, forgetting what the previous
+            # scenario latched: it hears what the reset nodes publish afresh, and nothing older.
+            monitor = FlightMonitor(s, ros, recorders, core, reused)
             if warm is not None:
                 stack.callback(monitor.close)  # (after the recorder has stopped: the stack unwinds in reverse)
+            if reused:
+                monitor.origin = warm.reset(config)
+                step("reset")
+            if warm is not None:
+                result["graph"] = warm.describe()
+            step("master")
             monitor.wait_for_graph(start_deadline)
             step("graph")
 

@@ -23,6 +23,7 @@ from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
 from landing_msgs.rospy_node import ended_by_shutdown, init_node, without_nagle
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
+from rospy.impl.paramserver import get_param_server_cache
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
 from std_msgs.msg import Empty, String
 from std_srvs.srv import Trigger, TriggerResponse
@@ -141,8 +142,9 @@ class SimNode:
             rospy.set_param("/drone_battery", self.start_battery)
         for name, spec in CONDITION_PARAMS.items():
             value = start[name]
-            if rospy.has_param("/" + name):
-                value = self._checked_condition(name, rospy.get_param("/" + name), value)
+            raw = _condition_anew(name)
+            if raw is not _NOTHING:
+                value = self._checked_condition(name, raw, value)
             self.conditions[name] = value
             rospy.set_param("/" + name, value)
         self._apply_conditions()
@@ -677,6 +679,23 @@ class SimNode:
         _fill_vector(msg.transform.translation, position)
         _quaternion_msg(msg.transform.rotation, quat_wxyz)
         return msg
+
+
+def _condition_anew(name):
+    """The condition parameter /``name`` as the master holds it now (_NOTHING when unset), and cached again from
+    there. rospy.get_param answers from rospy's cache once _sync_conditions has cached the key, and the master's push
+    of a new value lags (about 60 ms): at a warm graph's reset the cache still held the previous scenario's wind,
+    which was then written back over the runner's new value."""
+    key = rospy.resolve_name("/" + name)
+    try:
+        get_param_server_cache().delete(key)
+    except KeyError:  # not cached yet
+        pass
+    try:
+        value = rospy.get_param_cached(key)  # (subscribes again: the master's value, pushed from here on)
+    except KeyError:
+        return _NOTHING
+    return _NOTHING if value == {} else value
 
 
 def _master_param(key):
