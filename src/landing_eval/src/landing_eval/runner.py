@@ -317,6 +317,16 @@ class FlightMonitor:
                 (not self.s.get("_needs_tracker") or self.tracker_state is not None)
         self._wait(ready, "the graph did not come up", deadline)
 
+    def wait_for_recorder_gone(self, deadline):
+        """Until the previous run's recorder, stopping beside this run's reset (a warm graph), has unsubscribed:
+        the next one has its name, and its subscriptions could not be told apart."""
+        import rosgraph
+        master = rosgraph.Master("/scenario_runner")
+
+        def gone():
+            return not any("/" + RECORDER in nodes for _topic, nodes in master.getSystemState()[1])
+        self._wait(gone, "the previous run's flight recorder did not unsubscribe", deadline)
+
     def wait_for_recorder(self, recorder, deadline):
         """Until rosbag record (the IsolatedProcess ``recorder``) subscribes to every needed topic. It
         discovers topics on start-up and then on a sim-time timer, which does not run while the physics is
@@ -775,6 +785,9 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             step("master")
             monitor.wait_for_graph(start_deadline)
             step("graph")
+            if reused:
+                monitor.wait_for_recorder_gone(start_deadline)
+                step("previous_recorder_gone")
 
             monitor.wait_for_recorder(recorders.start(), start_deadline)
             step("recorder")
