@@ -37,6 +37,9 @@ class SummitMovesResetTest(unittest.TestCase):
                          lambda m: cls.commands.append((round(m.linear.x, 6), round(m.angular.z, 6))), queue_size=100)
         cls.takeoff = rospy.Publisher("/ardrone/takeoff", Empty, queue_size=1)
         rospy.wait_for_service(NODE + "/reset", timeout=WALL_TIMEOUT)
+        # This process's own clock reaches it over a connection like any other: on a loaded machine it took seconds.
+        testing.wait_for(lambda: rospy.get_time() >= CLOCK_START_S and cls.commands, "the clock and the node's first "
+                         "command", WALL_TIMEOUT)
 
     @classmethod
     def tearDownClass(cls):

@@ -244,6 +244,8 @@ class FlightMonitor:
         if self.closed:
             return
         self.closed = True
+        if self.rospy.core.is_shutdown_requested():
+            return  # (the graph was closed: this process has left it, and with its master gone an unsubscribe may hang)
         self.faults.close()
         self.handles.close()
         for publisher in (self.operator, self.tracker_command):
@@ -838,8 +840,9 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             if warm is None:
                 leaving.append(monitor.start_leaving_graph())
             else:
-                if aborted:
-                    warm.close()  # (the graph fell apart: the next scenario needs another runner process)
+                if aborted or monitor.master_lost_at is not None:
+                    # (the graph fell apart, or its master is gone: the next scenario needs another runner process)
+                    warm.close("the scenario %s" % ("aborted" if aborted else "killed the master"))
                 monitor.close()
                 # (time.monotonic() of this process: what a warm sweep spends between two flights)
                 result["graph"]["released_at_s"] = round(wall_flight_start, 3)

@@ -105,7 +105,11 @@ class WarmGraph:
             raise GraphMismatch("this runner's graph has stopped")
         if node_signature(config) != self.signature:
             raise GraphMismatch("the scenario needs other nodes than this runner's graph runs")
-        lacking = self.lacking_resets()
+        try:
+            lacking = self.lacking_resets()
+        except OSError as err:  # (a scenario killed the master: nothing can connect to this graph any more)
+            self.close("its master does not answer: %s" % err)
+            raise GraphMismatch("this runner's graph is gone (%s)" % self.gone)
         if lacking:
             raise GraphMismatch("this runner's graph cannot be reset: no ~reset on %s" % ", ".join(lacking))
         return config

@@ -81,6 +81,9 @@ def _fly(request, config, graph, free):
         reply({"status": "mismatch", "out_dir": out_dir, "reason": str(err)})
     except scenario_mod.ScenarioError as err:
         reply({"status": "error", "out_dir": out_dir, "reason": str(err)})
+    except Exception as err:  # noqa: BLE001 (whatever it is, the client must hear of this run)
+        reply({"status": "error", "out_dir": out_dir, "reason": "%s: %s" % (type(err).__name__, err)})
+        raise
     finally:
         free.set()
 
