@@ -268,12 +268,14 @@ def _outcome_of(spec, answer):
 
 def warm_local_runs(specs, jobs, log_root):
     """Yields (spec, outcome) as the runs finish, ``jobs`` at a time on this machine, each job slot flying its runs
-    on a warm graph (a WarmWorker; another one for a run that needs other nodes). Logs of the graphs: ``log_root``."""
+    on a warm graph (a WarmWorker; another one for a run that needs other nodes). Logs of the graphs: ``log_root``
+    (DATE-TIME_worker_N/)."""
     import queue
     pending, finished = queue.Queue(), queue.Queue()
     for spec in specs:
         pending.put(spec)
     counter = iter(range(1, 1 << 30))
+    started = time.strftime("%Y%m%d-%H%M%S")  # (a resumed sweep's workers log beside the first ones, not over them)
     stop = threading.Event()
 
     def slot():
@@ -314,7 +316,8 @@ def warm_local_runs(specs, jobs, log_root):
                         except queue.Empty:
                             break
                     if worker is None:
-                        worker = WarmWorker(spec["python"], os.path.join(log_root, "worker_%d" % next(counter)))
+                        worker = WarmWorker(spec["python"], os.path.join(log_root, "%s_worker_%d" % (
+                            started, next(counter))))
                     flying[spec["out_dir"]] = spec
                     if not worker.send(spec):
                         break
