@@ -4,15 +4,10 @@ outputs, no tracker command latched, the idle take-off timer from the reset on, 
 state), with its parameters as they are then; a bad parameter is refused and it goes on as it was; and its
 ~recovery follows the reset: a crash after it carries on in the new scenario, not in the previous one."""
 import json
-import os
-import signal
 import subprocess
 import sys
 import unittest
-import xmlrpc.client
 
-import rosgraph
-import rosnode
 import rospy
 import rostest
 from landing_msgs import testing
@@ -109,26 +104,11 @@ class SupervisorResetTest(unittest.TestCase):
             raise AssertionError("the newcomer failed: %s" % result.stderr[-2000:])
         return json.loads(result.stdout.strip().splitlines()[-1])
 
-    @staticmethod
-    def pid():
-        master = rosgraph.Master(rospy.get_name())
-        uri = rosnode.get_api_uri(master, NODE, skip_cache=True)
-        code, _message, pid = xmlrpc.client.ServerProxy(uri).getPid(rospy.get_name())
-        return pid if code == 1 else None
-
     def crash(self):
         """Kills the supervisor (SIGKILL: nothing tidied); supervisor.launch respawns it. Returns its decisions after
         the respawn from the 'recovered' one on."""
-        old_pid, before = self.pid(), len(self.out.messages["decisions"])
-        os.kill(old_pid, signal.SIGKILL)
-
-        def new_pid():
-            try:
-                pid = self.pid()
-            except Exception:  # not registered again yet
-                return None
-            return pid if pid not in (None, old_pid) else None
-        self.wait_for(new_pid, "the respawned supervisor")
+        before = len(self.out.messages["decisions"])
+        testing.crash_and_wait_for_respawn(NODE, WALL_TIMEOUT)
         self.wait_for(lambda: any(json.loads(d)["action"] == "recovered"
                                   for d in self.out.messages["decisions"][before:]), "the 'recovered' decision")
         return [json.loads(d) for d in self.out.messages["decisions"][before:]]

@@ -2,15 +2,10 @@
 """rostest of summit_moves' ~reset: a reset node starts its path afresh from the parameters as they are then (it
 waits for the take-off again, or starts at the reset), a bad parameter is refused while the path goes on, and its
 ~started_at follows the reset: a crash before the new path started starts afresh, one after it carries on."""
-import os
-import signal
 import threading
 import time
 import unittest
-import xmlrpc.client
 
-import rosgraph
-import rosnode
 import rospy
 import rostest
 from geometry_msgs.msg import Twist
@@ -80,26 +75,10 @@ class SummitMovesResetTest(unittest.TestCase):
     def started_at():
         return rospy.get_param(NODE + "/started_at", None)
 
-    @staticmethod
-    def pid():
-        master = rosgraph.Master(rospy.get_name())
-        uri = rosnode.get_api_uri(master, NODE, skip_cache=True)
-        code, _message, pid = xmlrpc.client.ServerProxy(uri).getPid(rospy.get_name())
-        return pid if code == 1 else None
-
     def crash(self):
         """Kills summit_moves (SIGKILL: nothing tidied); the launch respawns it. Returns the index of its first
         command after the respawn."""
-        old_pid = self.pid()
-        os.kill(old_pid, signal.SIGKILL)
-
-        def new_pid():
-            try:
-                pid = self.pid()
-            except Exception:  # not registered again yet
-                return None
-            return pid if pid not in (None, old_pid) else None
-        self.wait_for(new_pid, "the respawned summit_moves")
+        testing.crash_and_wait_for_respawn(NODE, WALL_TIMEOUT)
         return len(self.commands)  # the killed process publishes no more
 
     def test_1_a_reset_node_waits_for_the_takeoff_again_on_its_new_path(self):

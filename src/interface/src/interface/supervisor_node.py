@@ -392,9 +392,7 @@ class SupervisorNode:
 
 
 def main():
-    first = iter([True])  # only the process's first object may carry on from a crashed predecessor's state
-    return run_node("supervisor", lambda: SupervisorNode(carry_on=next(first, False)),
-                    startup_errors=(StartupError,), resettable=True)
+    return run_node("supervisor", SupervisorNode, startup_errors=(StartupError,), resettable=True, carries_on=True)
 
 
 if __name__ == "__main__":

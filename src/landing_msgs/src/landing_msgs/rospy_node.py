@@ -143,18 +143,23 @@ def spin_at(rate_hz, tick, until=lambda: False):
                 break
 
 
-def run_node(name, make_node, startup_errors, resettable=False):
+def run_node(name, make_node, startup_errors, resettable=False, carries_on=False):
     """main() of a node: init_node(name), ``node = make_node()``, ``node.spin()`` (with ``resettable``: behind
     ~reset, ResettableNode); returns the exit status. A startup error (one of ``startup_errors``: a missing or bad
-    parameter) is logged as fatal and gives 2."""
+    parameter) is logged as fatal and gives 2. ``carries_on``: the node keeps state for a respawn after a crash;
+    the process's first object is made as ``make_node(carry_on=True)`` (it may take up a crashed predecessor's
+    state), an object made by a reset as ``make_node(carry_on=False)`` (a new scenario starts afresh)."""
     init_node(name)
+    first, later = make_node, make_node
+    if carries_on:
+        first, later = (lambda: make_node(carry_on=True)), (lambda: make_node(carry_on=False))
     try:
-        node = make_node()
+        node = first()
     except startup_errors as err:
         rospy.logfatal(str(err))
         return 2
     if resettable:
-        ResettableNode(node, make_node, startup_errors).spin()
+        ResettableNode(node, later, startup_errors).spin()
     else:
         node.spin()
     return 0

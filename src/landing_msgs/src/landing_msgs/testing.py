@@ -33,3 +33,35 @@ def wait_for(condition, what, timeout, poll=0.02, process=None):
         if time.monotonic() > deadline:
             raise AssertionError("timed out after %.0f s (wall) waiting for %s%s" % (timeout, what, at))
         time.sleep(poll)
+
+
+def node_pid(node):
+    """The process id of the ROS node ``node`` (e.g. "/supervisor"), asked of the node itself; None when it is not
+    registered or does not answer."""
+    import xmlrpc.client
+
+    import rosgraph
+    import rosnode
+    import rospy
+    try:
+        uri = rosnode.get_api_uri(rosgraph.Master(rospy.get_name()), node, skip_cache=True)
+        code, _message, pid = xmlrpc.client.ServerProxy(uri).getPid(rospy.get_name())
+    except Exception:  # not registered (again) yet, or gone
+        return None
+    return pid if code == 1 else None
+
+
+def crash_and_wait_for_respawn(node, timeout):
+    """SIGKILL ``node``'s process (nothing tidied, as a crash) and wait until its launch has respawned it and the new
+    process is registered. Returns the new process id."""
+    import os
+    import signal
+    old = node_pid(node)
+    if old is None:
+        raise AssertionError("%s is not running: nothing to crash" % node)
+    os.kill(old, signal.SIGKILL)
+
+    def respawned():
+        pid = node_pid(node)
+        return pid if pid not in (None, old) else None
+    return wait_for(respawned, "the respawned %s" % node, timeout)

@@ -121,9 +121,7 @@ class SummitMovesNode:
 
 
 def main():
-    first = iter([True])  # only the process's first object may carry on from a crashed predecessor's path
-    return run_node("summit_moves", lambda: SummitMovesNode(carry_on=next(first, False)),
-                    startup_errors=(StartupError,), resettable=True)
+    return run_node("summit_moves", SummitMovesNode, startup_errors=(StartupError,), resettable=True, carries_on=True)
 
 
 if __name__ == "__main__":
