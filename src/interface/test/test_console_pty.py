@@ -135,6 +135,39 @@ def test_commands_as_arguments_without_a_terminal(ros_env, operator_commands):
     assert "dance" not in operator_commands.text
 
 
+# The supervisor in the landing mode (latched) and the sonar at 20 Hz (wall time: no /use_sim_time here).
+LANDING_AND_SONAR = """
+import rospy
+from sensor_msgs.msg import Range
+from std_msgs.msg import String
+rospy.init_node("landing_and_sonar")
+mode = rospy.Publisher("/supervisor/mode", String, queue_size=1, latch=True)
+mode.publish(String(data="landing"))
+sonar = rospy.Publisher("/ardrone/sonar_height", Range, queue_size=1)
+rate = rospy.Rate(20)
+while not rospy.is_shutdown():
+    sonar.publish(Range(range=1.23))
+    rate.sleep()
+"""
+
+
+def test_the_landing_menu_shows_the_sonar_height_and_the_sonar_as_seen(ros_env):
+    """The console watches the sonar's arrival and shows its height. Both once subscribed the same topic, the
+    watch (AnyMsg) first: rospy shares one subscription per topic and process, so the height's callback got
+    undecoded messages and failed on each one (a 'bad callback' traceback 25 times a second)."""
+    talker = subprocess.Popen([sys.executable, "-c", LANDING_AND_SONAR], env=ros_env, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        result = subprocess.run([sys.executable, CONSOLE, "--plain", "--commands", "wait 4;quit"],
+                                env=dict(ros_env, CONSOLE_NO_STDIN="1"), stdin=subprocess.DEVNULL,
+                                capture_output=True, text=True, timeout=TIMEOUT)
+    finally:
+        stop(talker)
+    assert result.returncode == 0, result.stderr
+    assert "height 1.23 m" in result.stdout, result.stdout[-2000:]
+    assert "bad callback" not in result.stdout + result.stderr, (result.stdout + result.stderr)[-2000:]
+
+
 @pytest.mark.needs_pty
 def test_manual_control_keys_fly_the_drone_as_the_teleop(ros_env):
     """start.launch's Manual Control by keyboard: with the teleop's parameters (~keyboard) and the supervisor in

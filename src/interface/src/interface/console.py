@@ -100,13 +100,17 @@ class ConsoleNode:
         rospy.Subscriber("emergency/position", PositionXYCommand,
                          lambda m: self._set(emergency_position=(m.x, m.y)))
         rospy.Subscriber("ardrone/navdata", Navdata, self._on_navdata)
+        # One subscription per topic: rospy shares one per topic and process, and its first message class wins
+        # (an AnyMsg one made first handed the height's callback undecoded messages). The sonar's own callback
+        # also marks it seen.
+        rospy.Subscriber(SENSOR_TOPICS["sonar"], Range, self._on_sonar, queue_size=1)
         for name, topic in SENSOR_TOPICS.items():
-            rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
+            if name != "sonar":
+                rospy.Subscriber(topic, rospy.AnyMsg, self._seen(name), queue_size=1)
         rospy.Subscriber("ardrone/odom_estimate", Odometry, self._on_odometry, queue_size=1)
         rospy.Subscriber("supervisor/flight_management", String, self._on_flight_management)
         rospy.Subscriber("platform_tracking/target", PointStamped,
                          lambda m: self._set(target_xy=(m.point.x, m.point.y)), queue_size=1)
-        rospy.Subscriber("ardrone/sonar_height", Range, lambda m: self._set(height=m.range), queue_size=1)
         rospy.Subscriber("platform_tracking/camera_latency", Float64, lambda m: self._set(
             camera_latency=m.data if math.isfinite(m.data) and m.data >= 0.0 else None), queue_size=1)
         if teleop is not None:
@@ -122,6 +126,10 @@ class ConsoleNode:
         def callback(_):
             self.last_seen[name] = self.rospy.get_time()
         return callback
+
+    def _on_sonar(self, msg):
+        self.last_seen["sonar"] = self.rospy.get_time()
+        self._set(height=msg.range)
 
     def _on_decision(self, msg):
         try:
