@@ -14,6 +14,8 @@ import concurrent.futures
 import queue
 import time
 
+from .scheduling import normal_scheduling
+
 # The MjData fields mjv_updateScene reads for the geoms, lights and cameras of the scene (positions and
 # orientations, as computed by the last mj_step).
 SCENE_STATE_FIELDS = ("qpos", "mocap_pos", "mocap_quat", "xpos", "xquat", "xmat", "xipos", "ximat",
@@ -32,7 +34,8 @@ class FrameRenderer:
         self.height, self.width, self.scene_option, self.develop = height, width, scene_option, develop
         self.renderer = None
         self._spare = queue.SimpleQueue()  # snapshots whose frame is rendered, to be reused
-        self._thread = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="camera")
+        self._thread = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="camera",
+                                                             initializer=normal_scheduling)
         self.render_s = 0.0  # thread CPU seconds spent rendering and developing [s]
 
     def warm_up(self):

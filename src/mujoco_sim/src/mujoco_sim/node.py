@@ -8,6 +8,7 @@ loses it (the realism profile, realism.py); the resolved profile is on ~realism_
 import copy
 import json
 import math
+import os
 import queue
 import sys
 import threading
@@ -34,6 +35,7 @@ from .config import ConfigError
 from .frame_renderer import DeliveredFrames
 from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
+from .scheduling import fifo_priority, thread_cpu_and_wait
 from .simulator import SONAR_FIELD_OF_VIEW_RAD, Simulator
 
 NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF: Navdata.STATE_TAKING_OFF,
@@ -84,6 +86,7 @@ class SimNode:
         self.conditions = {}
         self.rejected = {}  # condition -> the operator's invalid value, left in place and ignored
         self.lockstep_subscriber = None
+        self.scheduling_noted = _NOTHING  # the stepping thread's scheduling, as last logged (_note_scheduling)
         self._build_world()
         self._init_publishers()
         self._announce_world()
@@ -369,33 +372,53 @@ class SimNode:
         rospy.loginfo("simulating %s (seed %d) at %s", self.model_file, self.cfg["seed"],
                       "%gx real time" % rtf if rtf > 0 else "full speed")
         self.wall_start, self.sim_start = wall_start, sim_start
+        self.stepping_sched_start = thread_cpu_and_wait()
         try:
-            while not rospy.is_shutdown():
-                if not self.reset_requests.empty() or (self.wait_for_start and not self.start_received):
-                    return True
-                while not self.actions.empty():
-                    self.actions.get()()
-                if self.lockstep is not None:
-                    self._wait_for_lagging_nodes()
-                t0 = time.perf_counter()
-                self.sim.step()
-                t1 = time.perf_counter()
-                self.timing["physics"] += t1 - t0
-                self._publish_due(self.sim.time)
-                self.timing["publish"] += time.perf_counter() - t1
-                if rtf > 0:
-                    ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
-                    if ahead > 0.002:
-                        time.sleep(ahead)
-                        self.timing["pacing"] += ahead
-                if viewer is not None and self.schedules.setdefault("viewer", Schedule(30.0)).due(self.sim.time):
-                    viewer.sync()
-                if max_sim_time is not None and self.sim.time >= max_sim_time:
-                    return False
-            return False
+            with fifo_priority(self._stepping_priority(rtf)) as refused:
+                self._note_scheduling(refused)
+                return self._step_until_stopped(rtf, wall_start, sim_start, max_sim_time, viewer)
         finally:
             if viewer is not None:
                 viewer.close()
+
+    def _stepping_priority(self, rtf):
+        """The real-time priority of the stepping thread: only when lock-step paces the loop at full speed (the
+        thread then waits for the nodes whenever it is ahead; without lock-step it would keep a core to itself)
+        and with a second core for the nodes."""
+        paced_by_nodes = self.lockstep is not None and rtf == 0.0 and (os.cpu_count() or 1) >= 2
+        return self.cfg["lockstep"]["realtime_priority"] if paced_by_nodes else 0
+
+    def _note_scheduling(self, refused):
+        if refused != self.scheduling_noted:  # once, and again when it changes (a reset's parameters)
+            self.scheduling_noted = refused
+            rospy.loginfo("stepping at %s", "SCHED_FIFO priority %d" % self.cfg["lockstep"]["realtime_priority"]
+                          if refused is None else "normal priority: " + refused)
+
+    def _step_until_stopped(self, rtf, wall_start, sim_start, max_sim_time, viewer):
+        """The loop of _step_and_publish (same returns)."""
+        while not rospy.is_shutdown():
+            if not self.reset_requests.empty() or (self.wait_for_start and not self.start_received):
+                return True
+            while not self.actions.empty():
+                self.actions.get()()
+            if self.lockstep is not None:
+                self._wait_for_lagging_nodes()
+            t0 = time.perf_counter()
+            self.sim.step()
+            t1 = time.perf_counter()
+            self.timing["physics"] += t1 - t0
+            self._publish_due(self.sim.time)
+            self.timing["publish"] += time.perf_counter() - t1
+            if rtf > 0:
+                ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
+                if ahead > 0.002:
+                    time.sleep(ahead)
+                    self.timing["pacing"] += ahead
+            if viewer is not None and self.schedules.setdefault("viewer", Schedule(30.0)).due(self.sim.time):
+                viewer.sync()
+            if max_sim_time is not None and self.sim.time >= max_sim_time:
+                return False
+        return False
 
     def _wait_for_lagging_nodes(self):
         """Lock-step: hold sim time while a node that acknowledges its work lags too far behind."""
@@ -669,6 +692,12 @@ class SimNode:
         # The camera thread's CPU beside the loop above (rendering and developing frames; "render" is the time
         # the loop spent capturing them and waiting for them).
         stats["camera_thread_share"] = round(self.sim.camera_thread_seconds() / wall, 3) if wall > 0 else 0.0
+        # This (the stepping) thread on a core, and runnable but waiting for one: on a busy machine the second
+        # is what the other processes take from the loop's critical path.
+        now, start = thread_cpu_and_wait(), self.stepping_sched_start
+        if now is not None and start is not None and wall > 0:
+            stats["stepping_on_core_share"] = round((now[0] - start[0]) / wall, 3)
+            stats["stepping_waiting_for_core_share"] = round((now[1] - start[1]) / wall, 3)
         self.pub_stats.publish(String(data=json.dumps(stats)))
 
     @staticmethod

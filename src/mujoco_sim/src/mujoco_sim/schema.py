@@ -23,6 +23,7 @@ SIM_SCHEMA = {
         "enabled": Param(B),
         "max_lead_s": Param(F, 0.005, 10.0, "s"),
         "stale_after_wall_s": Param(F, 0.05, 60.0, "s"),
+        "realtime_priority": Param(I, 0, 99),
     },
     "camera": {
         "enabled": Param(B),

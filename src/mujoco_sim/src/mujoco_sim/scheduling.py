@@ -1,0 +1,50 @@
+"""The stepping thread's CPU scheduling.
+
+In the lock-step loop the simulator's stepping thread is the critical path, and on a 2-core machine it
+waited for a core about half of the flight: every message it sends wakes a node, which took its core
+(/proc schedstat of its thread: on a core 42 % of the flight, runnable but waiting 49-52 %). At a real-time
+priority (SCHED_FIFO) a woken node no longer preempts it; it still yields the core whenever it waits for a
+lagging node's acknowledgement, so the nodes get the cores the loop needs them on.
+"""
+import contextlib
+import os
+
+
+@contextlib.contextmanager
+def fifo_priority(priority):
+    """The calling thread at SCHED_FIFO ``priority`` (1..99) inside the block, and at the scheduling it had
+    before after it. Yields None when the priority is in force, else why it is not: ``priority`` 0, or the
+    system refused it (raising a priority needs CAP_SYS_NICE, e.g. root, or an RLIMIT_RTPRIO of at least
+    ``priority``: ``ulimit -r``). Threads the calling thread starts inside the block inherit the priority."""
+    if priority <= 0:
+        yield "real-time priority 0 asked: normal scheduling"
+        return
+    before = os.sched_getscheduler(0), os.sched_getparam(0)
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except OSError as err:  # PermissionError without the capability or limit
+        yield "SCHED_FIFO %d refused (%s): it needs CAP_SYS_NICE (root) or 'ulimit -r %d'" % (
+            priority, err.strerror or err, priority)
+        return
+    try:
+        yield None
+    finally:
+        os.sched_setscheduler(0, before[0], before[1])
+
+
+def normal_scheduling():
+    """Put the calling thread at normal scheduling (SCHED_OTHER; lowering needs no privilege): for a worker
+    thread that may have been started by a thread at a real-time priority."""
+    if os.sched_getscheduler(0) != os.SCHED_OTHER:
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+
+
+def thread_cpu_and_wait():
+    """(seconds on a core, seconds runnable but waiting for one) of the calling thread since it started, from the
+    kernel's scheduler statistics (/proc/thread-self/schedstat), or None where they are not kept."""
+    try:
+        with open("/proc/thread-self/schedstat") as stream:
+            on_core_ns, waiting_ns = stream.read().split()[:2]
+    except (OSError, ValueError):
+        return None
+    return int(on_core_ns) / 1e9, int(waiting_ns) / 1e9
