@@ -1,5 +1,6 @@
 """The camera's renderer thread: a frame shows the world of its capture, whatever the physics did since."""
 import concurrent.futures
+import os
 import threading
 
 import mujoco
@@ -49,6 +50,9 @@ def test_a_frame_shows_its_capture_instant_while_the_physics_steps_on():
         later = sim._develop(_raw(sim, direct), (None, sim.time, 0.0))
         assert not np.array_equal(expected, later)
         assert np.array_equal(frame.result(timeout=30), expected)
+        # the thread that rendered it, whose priority the simulator raises while it steps (scheduling)
+        assert sim.camera_thread_id() not in (None, threading.get_native_id())
+        assert os.path.exists("/proc/self/task/%d" % sim.camera_thread_id())
     finally:
         direct.close()
         sim.close()

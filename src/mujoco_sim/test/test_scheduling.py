@@ -87,3 +87,30 @@ def test_a_threads_time_on_a_core_grows_with_its_work_and_not_with_its_sleep():
     assert 0.15 < busy[0] - before[0] < 0.5
     assert slept[0] - busy[0] < 0.05  # asleep: neither on a core nor waiting for one
     assert slept[1] - busy[1] < 0.05
+
+
+@needs_fifo
+def test_another_thread_is_raised_with_the_calling_one_and_put_back_after():
+    ready, done = threading.Event(), threading.Event()
+    ids = {}
+
+    def waiting():
+        ids["worker"] = threading.get_native_id()
+        ready.set()
+        done.wait(30)
+    worker = threading.Thread(target=waiting)
+    worker.start()
+    ready.wait(30)
+
+    def work():
+        with fifo_priority(2, other_threads=[ids["worker"]]) as refused:
+            inside = refused, os.sched_getscheduler(ids["worker"]), os.sched_getparam(ids["worker"]).sched_priority
+        return inside, os.sched_getscheduler(ids["worker"])
+    try:
+        (refused, policy, priority), after = _policy_in_a_thread(work)
+    finally:
+        done.set()
+        worker.join(30)
+    assert refused is None
+    assert (policy, priority) == (os.SCHED_FIFO, 2)
+    assert after == os.SCHED_OTHER

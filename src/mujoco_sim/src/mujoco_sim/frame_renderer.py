@@ -12,6 +12,7 @@ images are the same, only when they are computed changes.
 import collections
 import concurrent.futures
 import queue
+import threading
 import time
 
 from .scheduling import normal_scheduling
@@ -35,8 +36,13 @@ class FrameRenderer:
         self.renderer = None
         self._spare = queue.SimpleQueue()  # snapshots whose frame is rendered, to be reused
         self._thread = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="camera",
-                                                             initializer=normal_scheduling)
+                                                             initializer=self._started)
         self.render_s = 0.0  # thread CPU seconds spent rendering and developing [s]
+        self.thread_id = None  # the rendering thread's native id, once it has started
+
+    def _started(self):
+        normal_scheduling()  # (started by a thread at a real-time priority, it would inherit it)
+        self.thread_id = threading.get_native_id()
 
     def warm_up(self):
         """Create the OpenGL context and render once (the first frame costs the most) in the thread, now:

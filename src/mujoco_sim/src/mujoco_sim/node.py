@@ -374,7 +374,8 @@ class SimNode:
         self.wall_start, self.sim_start = wall_start, sim_start
         self.stepping_sched_start = thread_cpu_and_wait()
         try:
-            with fifo_priority(self._stepping_priority(rtf)) as refused:
+            camera = [tid for tid in (self.sim.camera_thread_id(),) if tid is not None]
+            with fifo_priority(self._stepping_priority(rtf), other_threads=camera) as refused:
                 self._note_scheduling(refused)
                 return self._step_until_stopped(rtf, wall_start, sim_start, max_sim_time, viewer)
         finally:
@@ -382,17 +383,18 @@ class SimNode:
                 viewer.close()
 
     def _stepping_priority(self, rtf):
-        """The real-time priority of the stepping thread: only when lock-step paces the loop at full speed (the
-        thread then waits for the nodes whenever it is ahead; without lock-step it would keep a core to itself)
-        and with a second core for the nodes."""
+        """The real-time priority of the stepping thread and the camera's: only when lock-step paces the loop at
+        full speed (the thread then waits for the nodes whenever it is ahead; without lock-step it would keep a
+        core to itself) and with a second core for the nodes."""
         paced_by_nodes = self.lockstep is not None and rtf == 0.0 and (os.cpu_count() or 1) >= 2
         return self.cfg["lockstep"]["realtime_priority"] if paced_by_nodes else 0
 
     def _note_scheduling(self, refused):
         if refused != self.scheduling_noted:  # once, and again when it changes (a reset's parameters)
             self.scheduling_noted = refused
-            rospy.loginfo("stepping at %s", "SCHED_FIFO priority %d" % self.cfg["lockstep"]["realtime_priority"]
-                          if refused is None else "normal priority: " + refused)
+            priority = self.cfg["lockstep"]["realtime_priority"]
+            rospy.loginfo("stepping and rendering at %s", "SCHED_FIFO priority %d" % priority if refused is None
+                          else "normal priority: " + refused)
 
     def _step_until_stopped(self, rtf, wall_start, sim_start, max_sim_time, viewer):
         """The loop of _step_and_publish (same returns)."""

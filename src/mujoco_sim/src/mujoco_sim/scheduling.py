@@ -4,32 +4,46 @@ In the lock-step loop the simulator's stepping thread is the critical path, and 
 waited for a core about half of the flight: every message it sends wakes a node, which took its core
 (/proc schedstat of its thread: on a core 42 % of the flight, runnable but waiting 49-52 %). At a real-time
 priority (SCHED_FIFO) a woken node no longer preempts it; it still yields the core whenever it waits for a
-lagging node's acknowledgement, so the nodes get the cores the loop needs them on.
+lagging node's acknowledgement, so the nodes get the cores the loop needs them on. So does the camera's thread,
+whose frames the stepping thread waits for when they are due.
 """
 import contextlib
 import os
 
 
 @contextlib.contextmanager
-def fifo_priority(priority):
-    """The calling thread at SCHED_FIFO ``priority`` (1..99) inside the block, and at the scheduling it had
-    before after it. Yields None when the priority is in force, else why it is not: ``priority`` 0, or the
-    system refused it (raising a priority needs CAP_SYS_NICE, e.g. root, or an RLIMIT_RTPRIO of at least
-    ``priority``: ``ulimit -r``). Threads the calling thread starts inside the block inherit the priority."""
+def fifo_priority(priority, other_threads=()):
+    """The calling thread and ``other_threads`` (native thread ids) at SCHED_FIFO ``priority`` (1..99) inside the
+    block, and each at the scheduling it had before after it (a thread gone meanwhile is skipped). Yields None when
+    the priority is in force, else why it is not: ``priority`` 0, or the system refused it (raising a priority
+    needs CAP_SYS_NICE, e.g. root, or an RLIMIT_RTPRIO of at least ``priority``: ``ulimit -r``). Threads the
+    calling thread starts inside the block inherit the priority."""
     if priority <= 0:
         yield "real-time priority 0 asked: normal scheduling"
         return
-    before = os.sched_getscheduler(0), os.sched_getparam(0)
+    raised = []  # (thread id, its policy and parameters before)
     try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+        for thread in [0] + list(other_threads):  # 0: the calling thread
+            before = os.sched_getscheduler(thread), os.sched_getparam(thread)
+            os.sched_setscheduler(thread, os.SCHED_FIFO, os.sched_param(priority))
+            raised.append((thread, before))
     except OSError as err:  # PermissionError without the capability or limit
+        _restore(raised)
         yield "SCHED_FIFO %d refused (%s): it needs CAP_SYS_NICE (root) or 'ulimit -r %d'" % (
             priority, err.strerror or err, priority)
         return
     try:
         yield None
     finally:
-        os.sched_setscheduler(0, before[0], before[1])
+        _restore(raised)
+
+
+def _restore(raised):
+    for thread, (policy, param) in raised:
+        try:
+            os.sched_setscheduler(thread, policy, param)
+        except ProcessLookupError:  # that thread has ended
+            pass
 
 
 def normal_scheduling():

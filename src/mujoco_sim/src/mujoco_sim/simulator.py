@@ -698,6 +698,10 @@ class Simulator:
         """The image of capture_camera(), waited for."""
         return self.capture_camera(noise_std).result(timeout=FRAME_TIMEOUT_S)
 
+    def camera_thread_id(self):
+        """The native id of the camera's rendering thread, or None before it has started."""
+        return self._renderer.thread_id if self._renderer is not None else None
+
     def camera_thread_seconds(self):
         """CPU seconds the camera's thread has spent rendering and developing frames so far [s]."""
         return self._renderer.render_s if self._renderer is not None else 0.0
