@@ -374,27 +374,32 @@ class SimNode:
         self.wall_start, self.sim_start = wall_start, sim_start
         self.stepping_sched_start = thread_cpu_and_wait()
         try:
+            priority, why_not = self._stepping_priority(rtf)
             camera = [tid for tid in (self.sim.camera_thread_id(),) if tid is not None]
-            with fifo_priority(self._stepping_priority(rtf), other_threads=camera) as refused:
-                self._note_scheduling(refused)
+            with fifo_priority(priority, other_threads=camera) as refused:
+                self._note_scheduling(priority, why_not or refused)
                 return self._step_until_stopped(rtf, wall_start, sim_start, max_sim_time, viewer)
         finally:
             if viewer is not None:
                 viewer.close()
 
     def _stepping_priority(self, rtf):
-        """The real-time priority of the stepping thread and the camera's: only when lock-step paces the loop at
-        full speed (the thread then waits for the nodes whenever it is ahead; without lock-step it would keep a
-        core to itself) and with a second core for the nodes."""
-        paced_by_nodes = self.lockstep is not None and rtf == 0.0 and (os.cpu_count() or 1) >= 2
-        return self.cfg["lockstep"]["realtime_priority"] if paced_by_nodes else 0
+        """(the real-time priority of the stepping thread and the camera's, why it is 0 or None): only when
+        lock-step paces the loop at full speed (the thread then waits for the nodes whenever it is ahead; without
+        lock-step it would keep a core to itself) and with a second core for the nodes."""
+        if self.lockstep is None:
+            return 0, "lock-step is off"
+        if rtf > 0.0:
+            return 0, "real_time_factor %g paces the world" % rtf
+        if (os.cpu_count() or 1) < 2:
+            return 0, "one core only"
+        return self.cfg["lockstep"]["realtime_priority"], None
 
-    def _note_scheduling(self, refused):
-        if refused != self.scheduling_noted:  # once, and again when it changes (a reset's parameters)
-            self.scheduling_noted = refused
-            priority = self.cfg["lockstep"]["realtime_priority"]
-            rospy.loginfo("stepping and rendering at %s", "SCHED_FIFO priority %d" % priority if refused is None
-                          else "normal priority: " + refused)
+    def _note_scheduling(self, priority, why_not):
+        if why_not != self.scheduling_noted:  # once, and again when it changes (a reset's parameters)
+            self.scheduling_noted = why_not
+            rospy.loginfo("stepping and rendering at %s", "SCHED_FIFO priority %d" % priority if why_not is None
+                          else "normal priority: " + why_not)
 
     def _step_until_stopped(self, rtf, wall_start, sim_start, max_sim_time, viewer):
         """The loop of _step_and_publish (same returns)."""

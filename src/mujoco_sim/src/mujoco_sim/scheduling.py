@@ -1,4 +1,4 @@
-"""The stepping thread's CPU scheduling.
+"""The CPU scheduling of the simulator's stepping thread and its camera's rendering thread.
 
 In the lock-step loop the simulator's stepping thread is the critical path, and on a 2-core machine it
 waited for a core about half of the flight: every message it sends wakes a node, which took its core
