@@ -12,7 +12,6 @@ import os
 import re
 import time
 
-SCENARIO_LAUNCH = ("interface", "scenario.launch")
 SIMULATOR = "/mujoco_sim"
 RESET_SERVICE = "reset"        # each node's ~reset
 KEPT_PARAMS = ("run_id", "roslaunch")  # what roslaunch itself wrote at the start, not the launch file
