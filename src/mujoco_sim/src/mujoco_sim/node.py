@@ -393,7 +393,8 @@ class SimNode:
             return 0, "real_time_factor %g paces the world" % rtf
         if (os.cpu_count() or 1) < 2:
             return 0, "one core only"
-        return self.cfg["lockstep"]["realtime_priority"], None
+        priority = self.cfg["lockstep"]["realtime_priority"]
+        return priority, None if priority > 0 else "lockstep/realtime_priority is 0"
 
     def _note_scheduling(self, priority, why_not):
         if why_not != self.scheduling_noted:  # once, and again when it changes (a reset's parameters)

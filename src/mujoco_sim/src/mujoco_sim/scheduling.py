@@ -6,6 +6,10 @@ waited for a core about half of the flight: every message it sends wakes a node,
 priority (SCHED_FIFO) a woken node no longer preempts it; it still yields the core whenever it waits for a
 lagging node's acknowledgement, so the nodes get the cores the loop needs them on. So does the camera's thread,
 whose frames the stepping thread waits for when they are due.
+
+The price: the simulator then runs as far ahead of the nodes as lock-step allows (max_lead_s) all the time, as it
+does on a loaded machine, instead of letting each woken node run first. So it is off by default
+(lockstep/realtime_priority in config/sim.yaml).
 """
 import contextlib
 import os
