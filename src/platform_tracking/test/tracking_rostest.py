@@ -55,10 +55,16 @@ class FlightTest(unittest.TestCase):
         self.assertGreater(len(errors), 0.3 * len(estimates))
         self.assertLess(math.sqrt(sum(e * e for e in errors) / len(errors)), 0.2)
         self.assertLess(max(errors), 0.5)
-        # The camera latency it measured: the stand-in's detections arrive ~latency late, plus up to a 30 Hz tick.
+        # The camera latency it measured (sim time at receipt minus the detection's stamp): the stand-in's
+        # detections arrive ~latency late, plus up to two of its 30 Hz ticks (its next tick, and the newest pose it
+        # can pair being up to a tick old), plus as far as lock-step lets the simulator run ahead of the nodes (on
+        # a loaded machine it does). The median of the last five, so that one sample at a burst's edge does not
+        # decide.
         latency = rospy.get_param("/pipeline_stand_in/latency")
+        lead = rospy.get_param("/mujoco_sim/lockstep/max_lead_s")
         self.assertGreater(len(latencies), 5)
-        self.assertTrue(latency - 0.005 <= latencies[-1] <= latency + 2.0 / 30.0, latencies[-5:])
+        measured = sorted(latencies[-5:])[2]
+        self.assertTrue(latency - 0.005 <= measured <= latency + 2.0 / 30.0 + lead, latencies[-5:])
 
 
 if __name__ == "__main__":
