@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from mujoco_sim.scheduling import fifo_priority, normal_scheduling, thread_cpu_and_wait
+from mujoco_sim.scheduling import fifo_priority, normal_scheduling, stepping_priority, thread_cpu_and_wait
 
 
 def _fifo_allowed():
@@ -114,3 +114,11 @@ def test_another_thread_is_raised_with_the_calling_one_and_put_back_after():
     assert refused is None
     assert (policy, priority) == (os.SCHED_FIFO, 2)
     assert after == os.SCHED_OTHER
+
+
+def test_the_priority_applies_only_to_a_world_paced_by_its_nodes_on_two_cores_or_more():
+    assert stepping_priority(1, lockstep_on=True, real_time_factor=0.0, cores=2) == (1, None)
+    assert stepping_priority(0, True, 0.0, 2)[0] == 0
+    assert stepping_priority(1, False, 0.0, 2) == (0, "lock-step is off")
+    assert stepping_priority(1, True, 1.0, 2) == (0, "real_time_factor 1 paces the world")
+    assert stepping_priority(1, True, 0.0, 1) == (0, "one core only")

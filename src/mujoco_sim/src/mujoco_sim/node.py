@@ -35,7 +35,7 @@ from .config import ConfigError
 from .frame_renderer import DeliveredFrames
 from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
-from .scheduling import fifo_priority, thread_cpu_and_wait
+from .scheduling import fifo_priority, stepping_priority, thread_cpu_and_wait
 from .simulator import SONAR_FIELD_OF_VIEW_RAD, Simulator
 
 NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF: Navdata.STATE_TAKING_OFF,
@@ -374,7 +374,8 @@ class SimNode:
         self.wall_start, self.sim_start = wall_start, sim_start
         self.stepping_sched_start = thread_cpu_and_wait()
         try:
-            priority, why_not = self._stepping_priority(rtf)
+            priority, why_not = stepping_priority(self.cfg["lockstep"]["realtime_priority"], self.lockstep is not None,
+                                                  rtf, os.cpu_count() or 1)
             camera = [tid for tid in (self.sim.camera_thread_id(),) if tid is not None]
             with fifo_priority(priority, other_threads=camera) as refused:
                 self._note_scheduling(priority, why_not or refused)
@@ -382,19 +383,6 @@ class SimNode:
         finally:
             if viewer is not None:
                 viewer.close()
-
-    def _stepping_priority(self, rtf):
-        """(the real-time priority of the stepping thread and the camera's, why it is 0 or None): only when
-        lock-step paces the loop at full speed (the thread then waits for the nodes whenever it is ahead; without
-        lock-step it would keep a core to itself) and with a second core for the nodes."""
-        if self.lockstep is None:
-            return 0, "lock-step is off"
-        if rtf > 0.0:
-            return 0, "real_time_factor %g paces the world" % rtf
-        if (os.cpu_count() or 1) < 2:
-            return 0, "one core only"
-        priority = self.cfg["lockstep"]["realtime_priority"]
-        return priority, None if priority > 0 else "lockstep/realtime_priority is 0"
 
     def _note_scheduling(self, priority, why_not):
         if why_not != self.scheduling_noted:  # once, and again when it changes (a reset's parameters)

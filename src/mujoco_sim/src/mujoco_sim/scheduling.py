@@ -15,6 +15,19 @@ import contextlib
 import os
 
 
+def stepping_priority(configured, lockstep_on, real_time_factor, cores):
+    """(the real-time priority for the stepping and camera threads, why it is 0 or None): ``configured`` only when
+    lock-step paces the world at full speed (the stepping thread then waits for the nodes whenever it is ahead;
+    without lock-step it would keep a core to itself) and with a second core for the nodes."""
+    if not lockstep_on:
+        return 0, "lock-step is off"
+    if real_time_factor > 0.0:
+        return 0, "real_time_factor %g paces the world" % real_time_factor
+    if cores < 2:
+        return 0, "one core only"
+    return configured, None if configured > 0 else "lockstep/realtime_priority is 0"
+
+
 @contextlib.contextmanager
 def fifo_priority(priority, other_threads=()):
     """The calling thread and ``other_threads`` (native thread ids) at SCHED_FIFO ``priority`` (1..99) inside the
