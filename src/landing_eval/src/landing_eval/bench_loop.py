@@ -54,19 +54,32 @@ def parallel_gain_bound(busy, cores):
     return min(float(cores), cores / busy)
 
 
-def simulator_shares(bag):
-    """The simulator's own accounting at the end of the closed-loop run (the last /sim_stats in the bag): the shares
-    of its wall time spent in physics, rendering, publishing and waiting for the graph (lock-step), or {}."""
+def simulator_stats(bag):
+    """The simulator's own accounting at the end of the closed-loop run: the last /sim_stats in the bag, or {}."""
     try:
         import rosbag
         with rosbag.Bag(bag) as recorded:
             last = None
             for _, msg, _ in recorded.read_messages(topics=["/sim_stats"]):
                 last = msg
-        stats = json.loads(last.data) if last is not None else {}
+        return json.loads(last.data) if last is not None else {}
     except Exception:  # no bag, or no stats in it: the figures are only missing
         return {}
+
+
+def simulator_shares(stats):
+    """The shares of the simulator's wall time spent in physics, rendering, publishing and waiting for the graph
+    (lock-step), from its /sim_stats."""
     return {k[:-len("_share")]: v for k, v in stats.items() if k.endswith("_share")}
+
+
+STEPPING_CPU = ("physics", "publish", "stepping", "process")
+
+
+def stepping_cpu(stats):
+    """CPU seconds per sim second of the simulator's stepping thread in physics, in publishing, in all, and of its
+    whole process, from its /sim_stats ({} from a simulator that does not report them)."""
+    return {k: stats["cpu_%s_per_sim_s" % k] for k in STEPPING_CPU if "cpu_%s_per_sim_s" % k in stats}
 
 
 class Profiler:
@@ -137,6 +150,85 @@ IDLE = re.compile(r"^(wait|_wait_for_tstate_lock|sleep|select|poll|accept|recv_i
                   r"spin|epoll)\b|threading.py|selectors.py|socket.py.*\breadinto")
 
 
+def published_counts(bus_stats):
+    """{topic: (connections, messages sent over them)} of one node's publications, from its XML-RPC getBusStats:
+    rospy answers [code, text, stats] with [connection id, bytes, messages, connected] per connection, roscpp
+    [stats] with [connection id, bytes, data bytes, messages, ...]."""
+    stats = bus_stats[2] if isinstance(bus_stats[0], int) else bus_stats
+    counts = {}
+    for entry in stats[0]:
+        topic, connections = entry[0], entry[-1]
+        index = 3 if connections and len(connections[0]) >= 5 else 2
+        counts[topic] = (len(connections), sum(c[index] for c in connections))
+    return counts
+
+
+def deliveries_per_sim_second(first, second, sim_seconds):
+    """[(messages delivered per sim second, topic, publishing node, connections)], most first, from two census
+    snapshots {node: {topic: (connections, messages)}} taken ``sim_seconds`` apart (a connection made between them
+    counts from zero)."""
+    rows = []
+    for node, topics in second.items():
+        for topic, (connections, sent) in topics.items():
+            before = first.get(node, {}).get(topic, (0, 0))[1]
+            if sent > before and sim_seconds > 0:
+                rows.append(((sent - before) / sim_seconds, topic, node, connections))
+    return sorted(rows, reverse=True)
+
+
+class BusCensus:
+    """How many messages the run's graph delivers per sim second, topic by topic: every node's own counts (the
+    getBusStats every rospy and roscpp node answers over XML-RPC), read twice in flight, ``span_s`` wall seconds
+    apart, from ``after_s`` after the run's start (in flight for a scenario such as summit_circle_1ms); the sim
+    seconds between them from the /clock messages the simulator sent to each subscriber."""
+
+    def __init__(self, root_pid, after_s=8.0, span_s=5.0):
+        self.root_pid, self.after_s, self.span_s = root_pid, after_s, span_s
+        self.rows, self.error = [], None
+        self.thread = threading.Thread(target=self._run, daemon=True)
+
+    def start(self):
+        self.thread.start()
+        return self
+
+    def _snapshot(self, uris):
+        import xmlrpc.client
+        counts = {}
+        for node, uri in uris.items():
+            try:
+                counts[node] = published_counts(xmlrpc.client.ServerProxy(uri).getBusStats("/bench_loop"))
+            except (OSError, xmlrpc.client.Error, IndexError, TypeError):  # gone, or an answer of another form
+                pass
+        return counts
+
+    def _run(self):
+        try:
+            import rosgraph
+            time.sleep(self.after_s)
+            nodes = processes.nodes_below([self.root_pid])
+            command = processes.command_line(nodes["master"]) if "master" in nodes else []
+            port = command[command.index("-p") + 1] if "-p" in command[:-1] else None
+            if port is None:
+                self.error = "no master found below the run"
+                return
+            master = rosgraph.Master("/bench_loop", master_uri="http://127.0.0.1:%s/" % port)
+            publishers = master.getSystemState()[0]
+            uris = {node: master.lookupNode(node) for node in {n for _, names in publishers for n in names}}
+            clock_hz = master.getParam("/mujoco_sim/rates/clock_hz")
+            first = self._snapshot(uris)
+            time.sleep(self.span_s)
+            second = self._snapshot(uris)
+            connections, ticks = second.get("/mujoco_sim", {}).get("/clock", (0, 0))
+            ticks -= first.get("/mujoco_sim", {}).get("/clock", (0, 0))[1]
+            self.rows = deliveries_per_sim_second(first, second, ticks / connections / clock_hz if connections else 0.0)
+        except Exception as err:  # the census is a diagnostic: the benchmark goes on without it
+            self.error = "%s: %s" % (type(err).__name__, err)
+
+    def stop(self, timeout=30.0):
+        self.thread.join(timeout)
+        return {"rows": self.rows, "error": self.error}
+
+
 def measure_warm(scenario, out, profile, timeout, runs=3):
     """The scenario flown ``runs`` times by one warm worker (run_pool.WarmWorker) as in a warm sweep: the first on a
     fresh graph, each next one on the same graph after its reset, started while the previous run's recorder stops.
@@ -179,21 +271,25 @@ def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=Tru
                                  profile, "--wall-timeout", str(timeout)], stdout=log, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL)
         profiler = Profiler(loop.pid, run_dir).start() if py_spy else None
+        census = BusCensus(loop.pid).start()
         try:
             loop.wait(timeout=timeout + 300)
         except subprocess.TimeoutExpired:
             loop.kill()
             loop.wait()
         hot = profiler.stop() if profiler else {}
+        deliveries = census.stop()
     try:
         with open(os.path.join(run_dir, "result.json")) as stream:
             result = json.load(stream)
     except (OSError, ValueError):
         result = {"error": "no result.json; see %s" % os.path.join(run_dir, "run_scenario.log")}
+    stats = simulator_stats(result.get("bag") or "")
     return {"profile": profile, "sim_alone_rtf": alone.get("real_time_factor"), "render_share": alone.get("render_share"),
+            "sim_alone_cpu": stepping_cpu(alone), "sim_loop_cpu": stepping_cpu(stats), "deliveries": deliveries,
             "loop_rtf": result.get("real_time_factor"), "outcome": result.get("outcome"),
             "phases": result.get("wall_phases_s", {}), "cpu": node_cpu_per_sim_second(result), "hot": hot,
-            "steps": result.get("wall_steps_s", {}), "simulator": simulator_shares(result.get("bag") or ""),
+            "steps": result.get("wall_steps_s", {}), "simulator": simulator_shares(stats),
             "error": result.get("error"), "warm": measure_warm(scenario, run_dir, profile, timeout) if warm else None}
 
 
@@ -230,6 +326,13 @@ def report(rows):
         if r.get("simulator"):
             print("simulator's wall time in the closed loop, %s: %s" % (r["profile"], ", ".join(
                 "%s %.0f %%" % (k, 100 * v) for k, v in r["simulator"].items())))
+        alone, loop = r.get("sim_alone_cpu") or {}, r.get("sim_loop_cpu") or {}
+        if all(k in alone and k in loop for k in STEPPING_CPU):
+            print("simulator's CPU s per sim s, %s, alone -> in the closed loop: stepping thread %s (physics %s, "
+                  "publishing %s), whole process %s; the graph's subscribers and acknowledgements cost it %s" % (
+                      r["profile"], _change(alone, loop, "stepping", 3), _change(alone, loop, "physics", 3),
+                      _change(alone, loop, "publish", 3), _change(alone, loop, "process", 3),
+                      _f(loop["process"] - alone["process"], 3)))
         if r.get("steps"):
             print("start-up and shut-down steps, %s (wall s from the start): %s" % (r["profile"], ", ".join(
                 "%s %.2f" % (k, v) for k, v in r["steps"].items() if k not in ("flight", "clock_runs"))))
@@ -245,6 +348,18 @@ def report(rows):
     for name in names:
         print("| %s | %s |" % (name, " | ".join(_f(r["cpu"].get(name), 3) for r in rows)))
     print("| all | %s |" % " | ".join(_f(sum(r["cpu"].values()) if r["cpu"] else None, 3) for r in rows))
+    for r in rows:
+        census = r.get("deliveries") or {}
+        if census.get("rows"):
+            total = sum(row[0] for row in census["rows"])
+            print("\nmessages delivered per sim second in flight, %s: %.0f in all, %.0f of them by the simulator; the "
+                  "busiest topics:" % (r["profile"], total, sum(row[0] for row in census["rows"] if row[2] == "/mujoco_sim")))
+            print("| topic | publisher | connections | per sim s |")
+            print("|---|---|---|---|")
+            for rate, topic, node, connections in census["rows"][:15]:
+                print("| %s | %s | %d | %.0f |" % (topic, node, connections, rate))
+        elif census.get("error"):
+            print("(no census of the messages, %s: %s)" % (r["profile"], census["error"]))
     cores = len(os.sched_getaffinity(0))
     for r in rows:
         busy, ceiling = cpu_bound(r["cpu"], r["loop_rtf"], cores)
@@ -263,6 +378,10 @@ def _overhead(phases):
     if phases.get("start_up") is None or phases.get("shut_down") is None:
         return None
     return phases["start_up"] + phases["shut_down"]
+
+
+def _change(before, after, key, digits):
+    return "%s -> %s" % (_f(before.get(key), digits), _f(after.get(key), digits))
 
 
 def _f(value, digits=2):

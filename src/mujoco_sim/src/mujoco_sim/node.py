@@ -26,7 +26,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from rospy.impl.paramserver import get_param_server_cache
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
-from std_msgs.msg import Empty, String
+from std_msgs.msg import Empty, Header, String
 from std_srvs.srv import Trigger, TriggerResponse
 from tf2_msgs.msg import TFMessage
 
@@ -129,9 +129,15 @@ class SimNode:
         self.schedules["camera"] = Schedule(self.cfg["camera"]["rate_hz"])
         self.schedules["vehicle_gps"] = Schedule(self.sim.vehicle_cfg["gps_rate_hz"])
         self.schedules["stats"] = Schedule(0.2)
+        self.next_scheduled = 0.0  # the earliest time a schedule is due [sim s]
+        self.viewer_schedule = Schedule(30.0)
         self.last_touchdown = None
         self.delivered_frames = DeliveredFrames()
         self.timing = {"physics": 0.0, "render": 0.0, "publish": 0.0, "pacing": 0.0, "lockstep": 0.0}
+        # CPU time of the stepping thread (its own, whatever else the machine runs) in the physics step and in
+        # publishing, and of the whole process [s]: the publishing part is what the graph's subscribers cost it.
+        self.cpu = {"physics": 0.0, "publish": 0.0}
+        self.cpu_start = (time.thread_time(), time.process_time())
 
     def _now(self):
         """ROS time of the world's present [s]."""
@@ -193,6 +199,13 @@ class SimNode:
         self.pub_stats = pub("sim_stats", String, 1, latch=True)
         self.pub_tf = pub("/tf", TFMessage)  # (tf2_ros.TransformBroadcaster's publisher is a queued one)
         self.static_tf = tf2_ros.StaticTransformBroadcaster()
+        self.ground_truth_messages = {
+            "state": Odometry(header=Header(frame_id="world"), child_frame_id="ardrone/base_link"),
+            "drone": PoseStamped(header=Header(frame_id="world")), "vehicle": PoseStamped(header=Header(frame_id="world")),
+            "pad": PoseStamped(header=Header(frame_id="world"))}
+        self.tf_message = TFMessage(transforms=[
+            self._transform("world", "ardrone/base_link", (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), None),
+            self._transform("world", "summit_xl/base_link", (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), None)])
 
     def _announce_world(self):
         """The world's fixed transforms (latched) and its camera's calibration."""
@@ -373,6 +386,8 @@ class SimNode:
                       "%gx real time" % rtf if rtf > 0 else "full speed")
         self.wall_start, self.sim_start = wall_start, sim_start
         self.stepping_sched_start = thread_cpu_and_wait()
+        self.cpu = {"physics": 0.0, "publish": 0.0}  # (over the same span as the real-time factor)
+        self.cpu_start = (time.thread_time(), time.process_time())
         try:
             priority, why_not = stepping_priority(self.cfg["lockstep"]["realtime_priority"], self.lockstep is not None,
                                                   rtf, os.cpu_count() or 1)
@@ -399,18 +414,20 @@ class SimNode:
                 self.actions.get()()
             if self.lockstep is not None:
                 self._wait_for_lagging_nodes()
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             self.sim.step()
-            t1 = time.perf_counter()
+            t1, c1 = time.perf_counter(), time.thread_time()
             self.timing["physics"] += t1 - t0
+            self.cpu["physics"] += c1 - c0
             self._publish_due(self.sim.time)
             self.timing["publish"] += time.perf_counter() - t1
+            self.cpu["publish"] += time.thread_time() - c1
             if rtf > 0:
                 ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
                 if ahead > 0.002:
                     time.sleep(ahead)
                     self.timing["pacing"] += ahead
-            if viewer is not None and self.schedules.setdefault("viewer", Schedule(30.0)).due(self.sim.time):
+            if viewer is not None and self.viewer_schedule.due(self.sim.time):
                 viewer.sync()
             if max_sim_time is not None and self.sim.time >= max_sim_time:
                 return False
@@ -438,7 +455,25 @@ class SimNode:
             return None
 
     def _publish_due(self, t):
+        # Most 4 ms steps publish nothing of their own (the rates are 5-60 Hz): they only release what the links
+        # deliver.
+        due = self._publish_measured(t) if t + 1e-9 >= self.next_scheduled else None
+        for link in self.links:
+            if link.pending:
+                for publish in link.due(t):
+                    publish()
+        self.timing["render"] += self.delivered_frames.publish_ready(wait=False)
+        if due is not None:
+            self._publish_states(*due)
+        if self.sim.touchdown is not None and self.sim.touchdown is not self.last_touchdown:
+            self.last_touchdown = self.sim.touchdown
+            self._publish_touchdown(self.sim.touchdown)
+
+    def _publish_measured(self, t):
+        """What the rates make due at ``t``, up to the sensors measured now (sent through their links), which go
+        before the links release their earlier messages; returns (what is due, the stamp) for _publish_states."""
         due = {name: s.due(t) for name, s in self.schedules.items()}
+        self.next_scheduled = min(s.next for s in self.schedules.values())
         stamp = rospy.Time.from_sec(self.time_origin + t)
         if due["clock"]:
             self.timing["render"] += self.delivered_frames.publish_ready(wait=True)  # before ROS time moves on
@@ -468,11 +503,10 @@ class SimNode:
             self._send(self.sim.gps_link, self._vehicle_gps_message(stamp), self.pub_vehicle_gps)
         if due["navdata"]:
             self._send(self.sim.navdata_link, self._navdata_message(stamp), self.pub_navdata)
-        for link in self.links:
-            if link.pending:
-                for publish in link.due(t):
-                    publish()
-        self.timing["render"] += self.delivered_frames.publish_ready(wait=False)
+        return due, stamp
+
+    def _publish_states(self, due, stamp):
+        """The rest of what is due, after the links' releases: joint states, tf, statistics."""
         if due["joint_states"] and self.pub_joints.get_num_connections():
             self.pub_joints.publish(JointState(
                 header=self._header(stamp, ""), name=WHEEL_JOINTS,
@@ -481,9 +515,6 @@ class SimNode:
             self._publish_tf(stamp)
         if due["stats"]:
             self._publish_stats()
-        if self.sim.touchdown is not None and self.sim.touchdown is not self.last_touchdown:
-            self.last_touchdown = self.sim.touchdown
-            self._publish_touchdown(self.sim.touchdown)
 
     def _published(self, publisher, stamp):
         if self.lockstep is not None:
@@ -502,9 +533,7 @@ class SimNode:
 
     @staticmethod
     def _header(stamp, frame):
-        msg = Odometry().header
-        msg.stamp, msg.frame_id = stamp, frame
-        return msg
+        return Header(stamp=stamp, frame_id=frame)
 
     def _sync_conditions(self):
         """Read the global condition parameters; mirror the battery level back to /drone_battery."""
@@ -601,25 +630,32 @@ class SimNode:
                                                    pressure=1013.25 * (1.0 - 2.25577e-5 * z) ** 5.25588, qnh=1013.25))
 
     def _publish_ground_truth(self, stamp):
+        # One message object per topic, filled anew each time: these publishers write synchronously, so a message
+        # is on every subscriber's socket before it is filled again (building them was a third of the cost).
         position, quat = self.sim.drone_pose()
         velocity, omega = self.sim.drone_velocity()
+        messages = self.ground_truth_messages
         if self.pub_gt_state.get_num_connections():
-            odom = Odometry(header=self._header(stamp, "world"), child_frame_id="ardrone/base_link")
+            odom = messages["state"]
+            odom.header.stamp = stamp
             _fill_pose(odom.pose.pose, position, quat)
             _fill_vector(odom.twist.twist.linear, velocity)  # world frame, as Gazebo's p3d plugin
             _fill_vector(odom.twist.twist.angular, omega)
             self.pub_gt_state.publish(odom)
         if self.pub_gt_drone.get_num_connections():
-            msg = PoseStamped(header=self._header(stamp, "world"))
+            msg = messages["drone"]
+            msg.header.stamp = stamp
             _fill_pose(msg.pose, position, quat)
             self.pub_gt_drone.publish(msg)
         x, y, yaw = self.sim.vehicle_pose()
         if self.pub_gt_summit.get_num_connections():
-            msg = PoseStamped(header=self._header(stamp, "world"))
+            msg = messages["vehicle"]
+            msg.header.stamp = stamp
             _fill_pose(msg.pose, (x, y, 0.0), _yaw_quaternion(yaw))
             self.pub_gt_summit.publish(msg)
         if self.pub_gt_pad.get_num_connections():
-            msg = PoseStamped(header=self._header(stamp, "world"))
+            msg = messages["pad"]
+            msg.header.stamp = stamp
             _fill_pose(msg.pose, self.sim.pad_position(), _yaw_quaternion(yaw))
             self.pub_gt_pad.publish(msg)
 
@@ -665,11 +701,14 @@ class SimNode:
             rot_z=yaw, motor_thrust=float(sim.autopilot.motor_thrust.sum()) / sim.max_total_thrust)
 
     def _publish_tf(self, stamp):
+        if not self.pub_tf.get_num_connections():
+            return
         position, quat = self.sim.drone_pose()
         x, y, yaw = self.sim.vehicle_pose()
-        self.pub_tf.publish(TFMessage(transforms=[
-            self._transform("world", "ardrone/base_link", position, quat, stamp),
-            self._transform("world", "summit_xl/base_link", (x, y, 0.0), _yaw_quaternion(yaw), stamp)]))
+        drone, vehicle = self.tf_message.transforms  # (filled anew, as the ground truth)
+        _fill_transform(drone, position, quat, stamp)
+        _fill_transform(vehicle, (x, y, 0.0), _yaw_quaternion(yaw), stamp)
+        self.pub_tf.publish(self.tf_message)
 
     def _publish_touchdown(self, touchdown):
         msg = Touchdown(header=self._header(rospy.Time.from_sec(self.time_origin + touchdown.time), "world"), surface=touchdown.surface,
@@ -694,6 +733,12 @@ class SimNode:
         if now is not None and start is not None and wall > 0:
             stats["stepping_on_core_share"] = round((now[0] - start[0]) / wall, 3)
             stats["stepping_waiting_for_core_share"] = round((now[1] - start[1]) / wall, 3)
+        if sim_elapsed > 0:
+            thread_start, process_start = self.cpu_start
+            stats.update({"cpu_physics_per_sim_s": round(self.cpu["physics"] / sim_elapsed, 4),
+                          "cpu_publish_per_sim_s": round(self.cpu["publish"] / sim_elapsed, 4),
+                          "cpu_stepping_per_sim_s": round((time.thread_time() - thread_start) / sim_elapsed, 4),
+                          "cpu_process_per_sim_s": round((time.process_time() - process_start) / sim_elapsed, 4)})
         self.pub_stats.publish(String(data=json.dumps(stats)))
 
     @staticmethod
@@ -742,6 +787,12 @@ def _fill_vector(target, values):
 def _fill_pose(pose, position, quat_wxyz):
     _fill_vector(pose.position, position)
     _quaternion_msg(pose.orientation, quat_wxyz)
+
+
+def _fill_transform(transform, position, quat_wxyz, stamp):
+    transform.header.stamp = stamp
+    _fill_vector(transform.transform.translation, position)
+    _quaternion_msg(transform.transform.rotation, quat_wxyz)
 
 
 def _diag(value):
