@@ -1,6 +1,6 @@
 """How fast the closed loop runs against the simulator alone, per realism profile, and where the CPU goes.
 
-    rosrun landing_eval bench_loop scenarios/summit_circle_1ms.yaml --out DIR [--profiles ideal,realistic,harsh]
+    rosrun landing_eval bench_loop scenarios/summit_circle_1ms.yaml --out DIR [--profiles ideal,realistic,harsh] [--repeat N]
 
 For each profile, one after the other on this machine: the simulator alone at full speed with a camera
 subscriber (`bench_sim`), then the whole landing graph on the scenario (`run_scenario`), which samples the
@@ -16,6 +16,7 @@ import collections
 import json
 import os
 import re
+import statistics
 import subprocess
 import sys
 import threading
@@ -258,13 +259,14 @@ def measure_warm(scenario, out, profile, timeout, runs=3):
             "first_start_up": first.get("wall_phases_s", {}).get("start_up"), "between_flights": between}
 
 
-def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=True):
+def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=True, label=None):
     sim = subprocess.run(["rosrun", "landing_eval", "bench_sim", "--json", "--realism", profile,
                           "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
                          capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
     lines = [line for line in sim.stdout.splitlines() if line.startswith("{")]
     alone = json.loads(lines[-1]) if lines else {}
-    run_dir = os.path.join(out, profile)
+    label = label or profile
+    run_dir = os.path.join(out, label.replace(" #", "_"))
     os.makedirs(run_dir, exist_ok=True)
     with open(os.path.join(run_dir, "run_scenario.log"), "w") as log:
         loop = subprocess.Popen(["rosrun", "landing_eval", "run_scenario", scenario, "--out", run_dir, "--realism",
@@ -285,7 +287,7 @@ def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=Tru
     except (OSError, ValueError):
         result = {"error": "no result.json; see %s" % os.path.join(run_dir, "run_scenario.log")}
     stats = simulator_stats(result.get("bag") or "")
-    return {"profile": profile, "sim_alone_rtf": alone.get("real_time_factor"), "render_share": alone.get("render_share"),
+    return {"profile": profile, "label": label, "sim_alone_rtf": alone.get("real_time_factor"), "render_share": alone.get("render_share"),
             "sim_alone_cpu": stepping_cpu(alone), "sim_loop_cpu": stepping_cpu(stats), "deliveries": deliveries,
             "loop_rtf": result.get("real_time_factor"), "outcome": result.get("outcome"),
             "phases": result.get("wall_phases_s", {}), "cpu": node_cpu_per_sim_second(result), "hot": hot,
@@ -300,14 +302,14 @@ def report(rows):
     for r in rows:
         ratio = r["loop_rtf"] / r["sim_alone_rtf"] if r["loop_rtf"] and r["sim_alone_rtf"] else None
         print("| %s | %s | %s | %s | %s | %s | %s |" % (
-            r["profile"], _f(r["sim_alone_rtf"]), _f(r["loop_rtf"]), _f(ratio), _f(r["phases"].get("start_up")),
+            r["label"], _f(r["sim_alone_rtf"]), _f(r["loop_rtf"]), _f(ratio), _f(r["phases"].get("start_up")),
             _f(r["phases"].get("shut_down")), r["outcome"]))
     for r in rows:
         w = r.get("warm")
         if w:
             ratio = w["loop_rtf"] / r["sim_alone_rtf"] if w["loop_rtf"] and r["sim_alone_rtf"] else None
             print("| %s, graph reset%s | | %s | %s | %s | %s | %s |" % (
-                r["profile"], "" if w["reset"] else " (NOT: fresh)", _f(w["loop_rtf"]), _f(ratio),
+                r["label"], "" if w["reset"] else " (NOT: fresh)", _f(w["loop_rtf"]), _f(ratio),
                 _f(w["phases"].get("start_up")), _f(w["phases"].get("shut_down")), w["outcome"]))
     for r in rows:
         w = r.get("warm")
@@ -316,34 +318,44 @@ def report(rows):
             print("per-scenario overhead (start-up + shut-down), %s: fresh graph %.2f s, reset graph %.2f s (%.0f %% "
                   "less); in a warm sweep, between two flights (the recorder of one stopping beside the reset for the "
                   "next): %s s; the warm graph's own start-up, once per job: %s s" % (
-                      r["profile"], fresh, _overhead(w["phases"]), 100 * (1 - _overhead(w["phases"]) / fresh),
+                      r["label"], fresh, _overhead(w["phases"]), 100 * (1 - _overhead(w["phases"]) / fresh),
                       _f(w["between_flights"]), _f(w["first_start_up"])))
         if w and w.get("steps"):
             print("start-up and shut-down steps after a reset, %s (wall s from the start): %s" % (
-                r["profile"], ", ".join("%s %.2f" % (k, v) for k, v in w["steps"].items()
+                r["label"], ", ".join("%s %.2f" % (k, v) for k, v in w["steps"].items()
                                         if k not in ("flight", "clock_runs"))))
     for r in rows:
         if r.get("simulator"):
-            print("simulator's wall time in the closed loop, %s: %s" % (r["profile"], ", ".join(
+            print("simulator's wall time in the closed loop, %s: %s" % (r["label"], ", ".join(
                 "%s %.0f %%" % (k, 100 * v) for k, v in r["simulator"].items())))
         alone, loop = r.get("sim_alone_cpu") or {}, r.get("sim_loop_cpu") or {}
         if all(k in alone and k in loop for k in STEPPING_CPU):
             print("simulator's CPU s per sim s, %s, alone -> in the closed loop: stepping thread %s (physics %s, "
                   "publishing %s), whole process %s; the graph's subscribers and acknowledgements cost it %s" % (
-                      r["profile"], _change(alone, loop, "stepping", 3), _change(alone, loop, "physics", 3),
+                      r["label"], _change(alone, loop, "stepping", 3), _change(alone, loop, "physics", 3),
                       _change(alone, loop, "publish", 3), _change(alone, loop, "process", 3),
                       _f(loop["process"] - alone["process"], 3)))
         if r.get("steps"):
-            print("start-up and shut-down steps, %s (wall s from the start): %s" % (r["profile"], ", ".join(
+            print("start-up and shut-down steps, %s (wall s from the start): %s" % (r["label"], ", ".join(
                 "%s %.2f" % (k, v) for k, v in r["steps"].items() if k not in ("flight", "clock_runs"))))
-    base = next((r for r in rows if r["profile"] == "ideal" and r["loop_rtf"]), None)
-    for r in rows:
-        if base and r is not base and r["loop_rtf"]:
+    medians = {}
+    for profile in dict.fromkeys(r["profile"] for r in rows):
+        ratios = sorted(r["loop_rtf"] / r["sim_alone_rtf"] for r in rows
+                        if r["profile"] == profile and r["loop_rtf"] and r["sim_alone_rtf"])
+        loops = sorted(r["loop_rtf"] for r in rows if r["profile"] == profile and r["loop_rtf"])
+        if loops:
+            medians[profile] = statistics.median(loops)
+        if len(ratios) > 1:
+            print("%s, %d interleaved pairs: loop / alone median %.2f (%.2f-%.2f), closed loop RTF median %.2f "
+                  "(%.2f-%.2f)" % (profile, len(ratios), statistics.median(ratios), ratios[0], ratios[-1],
+                                   medians[profile], loops[0], loops[-1]))
+    for profile, median in medians.items():
+        if profile != "ideal" and "ideal" in medians:
             print("closed loop RTF %s / ideal: %.2f (the realism's cost: %.0f %% of the ideal loop's speed)" % (
-                r["profile"], r["loop_rtf"] / base["loop_rtf"], 100 * (1 - r["loop_rtf"] / base["loop_rtf"])))
+                profile, median / medians["ideal"], 100 * (1 - median / medians["ideal"])))
     print("\nCPU seconds per sim second per node over the flight (this run's processes only):")
     names = sorted({n for r in rows for n in r["cpu"]}, key=lambda n: -max(r["cpu"].get(n, 0) for r in rows))
-    print("| node | " + " | ".join(r["profile"] for r in rows) + " |")
+    print("| node | " + " | ".join(r["label"] for r in rows) + " |")
     print("|---|" + "---|" * len(rows))
     for name in names:
         print("| %s | %s |" % (name, " | ".join(_f(r["cpu"].get(name), 3) for r in rows)))
@@ -353,23 +365,23 @@ def report(rows):
         if census.get("rows"):
             total = sum(row[0] for row in census["rows"])
             print("\nmessages delivered per sim second in flight, %s: %.0f in all, %.0f of them by the simulator; the "
-                  "busiest topics:" % (r["profile"], total, sum(row[0] for row in census["rows"] if row[2] == "/mujoco_sim")))
+                  "busiest topics:" % (r["label"], total, sum(row[0] for row in census["rows"] if row[2] == "/mujoco_sim")))
             print("| topic | publisher | connections | per sim s |")
             print("|---|---|---|---|")
             for rate, topic, node, connections in census["rows"][:15]:
                 print("| %s | %s | %d | %.0f |" % (topic, node, connections, rate))
         elif census.get("error"):
-            print("(no census of the messages, %s: %s)" % (r["profile"], census["error"]))
+            print("(no census of the messages, %s: %s)" % (r["label"], census["error"]))
     cores = len(os.sched_getaffinity(0))
     for r in rows:
         busy, ceiling = cpu_bound(r["cpu"], r["loop_rtf"], cores)
         if busy is not None:
             print("%s: the graph kept %.2f of %d cores busy in flight; its CPU allows at most %.1fx here, and %d runs "
                   "side by side (benchmark --jobs %d) at most %.2fx the throughput of one at a time" % (
-                      r["profile"], busy, cores, ceiling, cores, cores, parallel_gain_bound(busy, cores)))
+                      r["label"], busy, cores, ceiling, cores, cores, parallel_gain_bound(busy, cores)))
     for r in rows:
         for node, functions in sorted(r.get("hot", {}).items()):
-            print("\npy-spy, %s, %s: own time by function (share of samples)" % (r["profile"], node))
+            print("\npy-spy, %s, %s: own time by function (share of samples)" % (r["label"], node))
             for share, frame in functions:
                 print("  %5.1f %%  %s" % (100 * share, frame))
 
@@ -396,6 +408,9 @@ def main(argv=None):
     parser.add_argument("--sim-seconds", type=float, default=60.0, help="sim time of the simulator-alone run [s]")
     parser.add_argument("--timeout", type=float, default=900.0, help="wall-clock limit of each run [s]")
     parser.add_argument("--no-warm", action="store_true", help="skip the runs on a warm graph")
+    parser.add_argument("--repeat", type=int, default=1, help="measure each profile this many times, the profiles "
+                        "taking turns (alone, loop, alone, loop, ...), and print the medians: the machine's speed "
+                        "drifts from one minute to the next")
     parser.add_argument("--profile", action="store_true", help="sample every Python node of the closed loop with "
                         "py-spy (slows the run: its RTF is not comparable) and print each one's hottest functions")
     args = parser.parse_args(argv)
@@ -404,9 +419,13 @@ def main(argv=None):
     if unknown:
         print("bench_loop: unknown profile(s) %s (known: %s)" % (", ".join(unknown), ", ".join(PROFILES)), file=sys.stderr)
         return 2
+    if args.repeat < 1:
+        print("bench_loop: --repeat must be 1 or more, got %d" % args.repeat, file=sys.stderr)
+        return 2
     os.makedirs(args.out, exist_ok=True)
-    rows = [measure(args.scenario, args.out, p, args.sim_seconds, args.timeout, args.profile, not args.no_warm)
-            for p in profiles]
+    rows = [measure(args.scenario, args.out, p, args.sim_seconds, args.timeout, args.profile, not args.no_warm,
+                    label=p if args.repeat == 1 else "%s #%d" % (p, k + 1))
+            for k in range(args.repeat) for p in profiles]
     with open(os.path.join(args.out, "bench_loop.json"), "w") as stream:
         json.dump(rows, stream, indent=2)
     report(rows)
