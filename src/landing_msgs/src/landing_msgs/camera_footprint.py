@@ -49,6 +49,13 @@ def coverage(corners, centre_xy, yaw, rectangle):
     if whole <= 1e-12:
         return 0.0
     x_min, x_max, y_min, y_max = rectangle
+    # Wholly outside or wholly inside, the clipping below would give nothing or the polygon itself (the usual
+    # cases: the view far from the vehicle, or low over it); the estimator asks seven times per navdata.
+    xs, ys = [p[0] for p in local], [p[1] for p in local]
+    if max(xs) < x_min or min(xs) > x_max or max(ys) < y_min or min(ys) > y_max:
+        return 0.0
+    if min(xs) >= x_min and max(xs) <= x_max and min(ys) >= y_min and max(ys) <= y_max:
+        return 1.0
     inside = local
     for axis, bound, keep_below in ((0, x_min, False), (0, x_max, True), (1, y_min, False), (1, y_max, True)):
         inside = _clip(inside, axis, bound, keep_below)
@@ -58,18 +65,19 @@ def coverage(corners, centre_xy, yaw, rectangle):
 
 
 def _clip(polygon, axis, bound, keep_below):
-    """The part of ``polygon`` on one side of the line ``p[axis] = bound``."""
-    def keep(p):
-        return p[axis] <= bound if keep_below else p[axis] >= bound
+    """The part of ``polygon`` on one side of the line ``p[axis] = bound`` (Sutherland-Hodgman)."""
     out = []
-    for i, current in enumerate(polygon):
-        previous = polygon[i - 1]
-        if keep(current):
-            if not keep(previous):
+    previous = polygon[-1]
+    previous_kept = previous[axis] <= bound if keep_below else previous[axis] >= bound
+    for current in polygon:
+        kept = current[axis] <= bound if keep_below else current[axis] >= bound
+        if kept:
+            if not previous_kept:
                 out.append(_crossing(previous, current, axis, bound))
             out.append(current)
-        elif keep(previous):
+        elif previous_kept:
             out.append(_crossing(previous, current, axis, bound))
+        previous, previous_kept = current, kept
     return out
 
 

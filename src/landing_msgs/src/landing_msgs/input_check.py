@@ -42,16 +42,20 @@ def numbers_problem(limit=math.inf, **named):
     for name, values in named.items():
         sequence = values if isinstance(values, (list, tuple)) else (values,)
         for index, value in enumerate(sequence):
-            label = name if len(sequence) == 1 and not isinstance(values, (list, tuple)) else "%s[%d]" % (name, index)
             try:
                 number = float(value)
             except (TypeError, ValueError):
-                return "malformed", "%s is %r, not a number" % (label, value)
+                return "malformed", "%s is %r, not a number" % (_label(name, values, index), value)
             if not math.isfinite(number):
-                return "non-finite", "%s is %s" % (label, number)
+                return "non-finite", "%s is %s" % (_label(name, values, index), number)
             if abs(number) > limit:
-                return "out of range", "%s = %.3g is beyond +-%g" % (label, number, limit)
+                return "out of range", "%s = %.3g is beyond +-%g" % (_label(name, values, index), number, limit)
     return None
+
+
+def _label(name, values, index):
+    """How numbers_problem names a value: ``name`` alone, or ``name[index]`` in a sequence."""
+    return "%s[%d]" % (name, index) if isinstance(values, (list, tuple)) else name
 
 
 def stamp_problem(stamp, now, max_age=MAX_AGE_S, max_future=MAX_FUTURE_S):

@@ -44,6 +44,7 @@ class FlowSurface:
         self.rays = camera_footprint.corner_rays(params.camera_hfov_deg, params.image_aspect)
         self.rectangle = (params.top_x_min, params.top_x_max, params.top_y_min, params.top_y_max)
         self.pad_yaw = 0.0  # the vehicle's heading, kept while it stands still
+        self._view = (None, None, None)  # (orientation, body z axis in the world, world <- optical) of the last call
 
     @property
     def enabled(self):
@@ -55,9 +56,9 @@ class FlowSurface:
             return 0.0
         if math.hypot(pad_velocity[0], pad_velocity[1]) > MIN_HEADING_SPEED:
             self.pad_yaw = math.atan2(pad_velocity[1], pad_velocity[0])
-        rotation = rotation_of(*orientation_wxyz)
-        camera = np.asarray(drone_position, dtype=float) - self.p.camera_below_base_link * rotation[:, 2]
-        corners = camera_footprint.footprint(camera, rotation @ CAMERA_OPTICAL_IN_BODY, self.rays, pad_position[2])
+        body_z, world_from_optical = self._rotations(orientation_wxyz)
+        camera = np.asarray(drone_position, dtype=float) - self.p.camera_below_base_link * body_z
+        corners = camera_footprint.footprint(camera, world_from_optical, self.rays, pad_position[2])
         if corners is None:  # at the pad's height or below: resting on it (or beside the vehicle)
             c, s = math.cos(self.pad_yaw), math.sin(self.pad_yaw)
             dx, dy = drone_position[0] - pad_position[0], drone_position[1] - pad_position[1]
@@ -67,6 +68,15 @@ class FlowSurface:
         else:
             share = camera_footprint.coverage(corners, pad_position[:2], self.pad_yaw, self.rectangle)
         return camera_footprint.surface_weight(share, self.p.coverage_low, self.p.coverage_high)
+
+    def _rotations(self, orientation_wxyz):
+        """(body z axis in the world, world <- optical rotation) of an orientation, kept for the next call: the
+        estimator asks for the weight at seven positions with one orientation per navdata."""
+        key = tuple(float(q) for q in orientation_wxyz)
+        if key != self._view[0]:
+            rotation = rotation_of(*orientation_wxyz)
+            self._view = (key, rotation[:, 2], rotation @ CAMERA_OPTICAL_IN_BODY)
+        return self._view[1], self._view[2]
 
     def seen_pad_velocity(self, drone_position, orientation_wxyz, pad_position, pad_velocity):
         """The part of the pad's velocity (world x, y) the flow takes off the drone's: w v_pad."""

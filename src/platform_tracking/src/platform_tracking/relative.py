@@ -34,7 +34,9 @@ class RelativeTrack:
 
     def __init__(self, fix_gain, max_age, flow_lag=0.0):
         self.fix_gain, self.max_age, self.flow_lag = fix_gain, max_age, flow_lag
-        self.motion = collections.deque()  # (time, rate of pad - drone) from each flow sample, oldest first
+        # (time, rate of pad - drone, its x, its y) from each flow sample, oldest first (the rate's components as
+        # floats too: _carried sums a hundred of them, and numpy's arithmetic on two-element arrays cost 5x more)
+        self.motion = collections.deque()
         self.anchor = None                 # (time, relative position) of the latest fix, filtered
 
     def reset(self):
@@ -54,7 +56,8 @@ class RelativeTrack:
         track afresh."""
         if self.motion and t < self.motion[-1][0]:
             self.reset()
-        self.motion.append((t, np.asarray(rate_xy, dtype=float)))
+        rate = np.asarray(rate_xy, dtype=float)
+        self.motion.append((t, rate, float(rate[0]), float(rate[1])))
         while len(self.motion) > 2 and self.motion[0][0] < t - self.HISTORY:
             self.motion.popleft()
 
@@ -83,17 +86,24 @@ class RelativeTrack:
     def _carried(self, t):
         """The anchor carried on to ``t`` by the flow's rates: between two samples their mean, after the last its
         own, before the first its own."""
-        t0, position = self.anchor
-        position = position.copy()
+        t0, anchor = self.anchor
+        x, y = float(anchor[0]), float(anchor[1])
         samples = list(self.motion)
-        first_t, first_rate = samples[0]
+        first_t, _, first_x, first_y = samples[0]
         if t0 < first_t:
-            position += first_rate * (min(first_t, t) - t0)
-        for (ta, ra), (tb, rb) in zip(samples, samples[1:]):
+            span = min(first_t, t) - t0
+            x, y = x + first_x * span, y + first_y * span
+        # Only the pairs of samples that overlap t0..t add anything: from the first one ending after t0 (the anchor
+        # is a fix a camera latency old; the history holds 2 s) to the last one starting before t.
+        first = max(0, bisect.bisect_right([m[0] for m in samples], t0) - 1)
+        for (ta, _, ax, ay), (tb, _, bx, by) in zip(samples[first:], samples[first + 1:]):
+            if ta >= t:
+                break
             start, end = max(ta, t0), min(tb, t)
             if end > start:
-                position += 0.5 * (ra + rb) * (end - start)
-        last_t, last_rate = samples[-1]
+                x, y = x + 0.5 * (ax + bx) * (end - start), y + 0.5 * (ay + by) * (end - start)
+        last_t, _, last_x, last_y = samples[-1]
         if t > max(last_t, t0):
-            position += last_rate * (t - max(last_t, t0))
-        return position
+            span = t - max(last_t, t0)
+            x, y = x + last_x * span, y + last_y * span
+        return np.array([x, y])
