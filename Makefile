@@ -8,8 +8,8 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 JOBS ?= 2
 
 # Debian's own ROS 1 (catkin, roscore, roslaunch, rostest, rosbag), OpenCV, Eigen, offscreen Mesa; aiohttp for the
-# web operator station, headless Chromium + chromium-driver + Selenium for its browser tests; jemalloc for the
-# flight recorder (interface/launch/record.launch).
+# web operator station, headless Chromium + chromium-driver + Selenium for its browser tests; rosbag_storage,
+# topic_tools and jemalloc for the flight recorder (flight_recorder, interface/launch/record.launch).
 APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip python3-yaml python3-numpy python3-pytest \
   catkin ros-base-dev python3-rospy python3-roslaunch python3-rostest python3-rosbag python3-rosnode \
   python3-rostopic python3-rosparam python3-rosservice python3-rosgraph rosbash ros-message-generation \
@@ -19,7 +19,7 @@ APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip pytho
   libtf2-geometry-msgs-dev python3-tf2-geometry-msgs libopencv-dev python3-opencv libeigen3-dev \
   libgtest-dev googletest libosmesa6 libgl1 libglfw3 rviz \
   python3-std-srvs libstd-srvs-dev libyaml-cpp-dev \
-  python3-aiohttp chromium chromium-driver python3-selenium libjemalloc2
+  python3-aiohttp chromium chromium-driver python3-selenium libjemalloc2 librosbag-storage-dev libtopic-tools-dev
 
 .PHONY: all deps build test demo bench clean
 
