@@ -1,219 +1,162 @@
 #!/usr/bin/env python3
-"""rostest of the flight recorder under sim time (recorder.test): what it records and with which receipt times,
-its splits, a latched topic, a clean stop on SIGINT and SIGTERM, what a SIGKILL leaves, and bad command lines.
-
-The test is the clock: it publishes /clock itself, so that the receipt times the bag holds are known."""
+"""flight_recorder's record in a launch with /use_sim_time, as the project runs it: two recorders (one bag, and
+one split every 2 s of sim time) of the topics this test publishes (one latched, one not matching the regex)
+on the sim clock this test publishes. Stopped with SIGINT and SIGTERM, their bags are checked with the Python
+rosbag API and with rosbags."""
+import glob
 import os
-import shutil
 import signal
-import subprocess
-import tempfile
+import sys
+import time
 import unittest
-import xmlrpc.client
 
 import rosbag
-import rosgraph
-import roslib.packages
 import rospy
 import rostest
-from geometry_msgs.msg import PoseStamped, TransformStamped
-from landing_msgs.testing import wait_for
-from rosgraph_msgs.msg import Clock
+from geometry_msgs.msg import Twist
+from rosbags.rosbag1 import Reader
 from sensor_msgs.msg import Imu
 from std_msgs.msg import String
-from tf2_msgs.msg import TFMessage
 
-TIMEOUT = 60.0  # wall seconds any wait may take on a loaded machine
-REGEX = "/(ardrone/imu|groundtruth/.*|tf|tf_static)"
-OPTIONS = ["--lz4", "--chunksize=32", "-e", REGEX]
-RECORDED = ("/ardrone/imu", "/groundtruth/ardrone", "/tf")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from recorder_test_support import (SIM_START_S, SimClock, master, node_pid, process_gone, subscribers_of,  # noqa: E402
+                                   wait_delivered, wait_for)
 
-
-class Clockwork:
-    """/clock from this test: sim time moves only when the test steps it."""
-
-    def __init__(self):
-        self.publisher = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
-        self.now = 1.0
-        self.publish()
-
-    def publish(self):
-        self.publisher.publish(Clock(clock=rospy.Time.from_sec(self.now)))
-        wait_for(lambda: abs(rospy.get_time() - self.now) < 1e-6, "the test's own clock at %.3f" % self.now, TIMEOUT)
-
-    def step(self, seconds):
-        self.now = round(self.now + seconds, 6)
-        self.publish()
+ROUNDS = 150          # messages on each recorded topic
+ROUND_WALL_S = 0.03   # 4.5 s of sim time: the split recorder writes 3 bags of 2 s
+SPLIT_S = 2.0
+IMU, TWIST, LATCHED, IGNORED = ("/recorder_test/imu", "/recorder_test/twist", "/recorder_test/latched",
+                                "/recorder_test/ignored")
+RECORDERS = ("/flight_recorder", "/flight_recorder_split")
 
 
 class RecorderTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        rospy.init_node("test_flight_recorder")
-        cls.clock = Clockwork()
-        cls.record = roslib.packages.find_node("flight_recorder", "record")[0]
-        cls.publishers = {
-            "/ardrone/imu": rospy.Publisher("/ardrone/imu", Imu, queue_size=1000),
-            "/groundtruth/ardrone": rospy.Publisher("/groundtruth/ardrone", PoseStamped, queue_size=1000),
-            "/tf": rospy.Publisher("/tf", TFMessage, queue_size=1000),
-            "/not/recorded": rospy.Publisher("/not/recorded", String, queue_size=1000)}
-        cls.static = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
-        cls.static.publish(TFMessage(transforms=[TransformStamped(child_frame_id="landing_pad")]))
+        rospy.init_node("recorder_test")
+        prefix = rospy.get_param("~bag_prefix")
+        cls.bag = prefix + "_flight.bag"
+        cls.split_stem = prefix + "_split"
+        cls.clock = SimClock()
+        # queue_size=None: published synchronously, so that delivery can be checked on the sockets
+        imu = rospy.Publisher(IMU, Imu, queue_size=None)
+        twist = rospy.Publisher(TWIST, Twist, queue_size=None)
+        latched = rospy.Publisher(LATCHED, String, queue_size=None, latch=True)
+        ignored = rospy.Publisher(IGNORED, String, queue_size=None)
+        latched.publish(String(data="latched before the recorders subscribed"))
 
-    def setUp(self):
-        self.dir = tempfile.mkdtemp(prefix="flight_recorder_test_")
+        for recorder in RECORDERS:
+            for topic in (IMU, TWIST, LATCHED):
+                wait_for(lambda: recorder in subscribers_of(topic), "%s to subscribe to %s" % (recorder, topic))
+        # registered at the master is not yet connected: a message published before would be lost
+        for publisher in (imu, twist, latched):
+            wait_for(lambda: publisher.get_num_connections() == len(RECORDERS),
+                     "both recorders to connect to " + publisher.resolved_name)
+        cls.pids = {recorder: node_pid(recorder) for recorder in RECORDERS}
+        cls.written_before_clock = glob.glob(prefix + "*")
 
-    def tearDown(self):
-        shutil.rmtree(self.dir, ignore_errors=True)
+        cls.clock.start()
+        wait_for(lambda: os.path.exists(cls.bag + ".active") and os.path.exists(cls.split_stem + "_0.bag.active"),
+                 "the recorders to open their bags once the clock is valid")
+        cls.first_stamp = cls.clock.now()
+        for i in range(ROUNDS):
+            message = Imu()
+            message.angular_velocity.x = i  # its number (rospy sets header.seq itself)
+            message.header.stamp = cls.clock.now()
+            imu.publish(message)
+            twist.publish(Twist())
+            ignored.publish(String(data="not recorded"))
+            time.sleep(ROUND_WALL_S)  # the publishing rate
+        cls.last_stamp = cls.clock.now()
+        wait_delivered([imu, twist, latched], "the recorders to read every message")
 
-    def start(self, *options, name="flight.bag"):
-        process = subprocess.Popen([self.record, "--output-name=" + os.path.join(self.dir, name)] + list(options) +
-                                   OPTIONS + ["__name:=flight_recorder"], stderr=subprocess.PIPE, text=True)
-        self.addCleanup(lambda: process.poll() is None and (process.kill(), process.wait()))
-        # (asked of the recorder: this test's publishers still count the previous recorder's connections a while)
-        wait_for(lambda: self.connected() >= set(RECORDED) | {"/tf_static"}, "the recorder on every recorded topic",
-                 TIMEOUT, process=process)
-        # Its side of a connection may be up before this side's: probe until every topic gets through, and count
-        # from there.
-        def through():
-            self.send_round()
-            received = self.received()
-            return received if all(received.get(t, 0) for t in RECORDED) else None
-        self.baseline = wait_for(through, "a first message through on every topic", TIMEOUT, poll=0.05,
-                                 process=process)
-        return process
+        cls.stop_wall_s = {}
+        for recorder, sig in zip(RECORDERS, (signal.SIGINT, signal.SIGTERM)):
+            began = time.monotonic()
+            os.kill(cls.pids[recorder], sig)
+            wait_for(lambda: process_gone(cls.pids[recorder]), "%s to exit after %s" % (recorder, sig.name),
+                     poll_s=0.002)
+            cls.stop_wall_s[recorder] = time.monotonic() - began
+        cls.split_bags = sorted(glob.glob(glob.escape(cls.split_stem) + "_*.bag*"),
+                                key=lambda p: int(p[len(cls.split_stem) + 1:].split(".")[0]))
+        state = master().getSystemState()  # (publications, subscriptions, services) once both have exited
+        kinds = ("published", "subscribed", "service")
+        cls.left_registered = sorted({(kind, name) for kind, entries in zip(kinds, state)
+                                      for name, nodes in entries for node in nodes if node in RECORDERS})
+        cls.clock.running = False
+        rospy.loginfo("stop wall times: %s", cls.stop_wall_s)
 
-    def recorder(self):
-        uri = rosgraph.Master(rospy.get_name()).lookupNode("/flight_recorder")
-        return xmlrpc.client.ServerProxy(uri)
+    @classmethod
+    def tearDownClass(cls):
+        for path in glob.glob(glob.escape(cls.bag) + "*") + glob.glob(glob.escape(cls.split_stem) + "_*"):
+            os.remove(path)
 
-    def connected(self):
-        """Topics the recorder receives over a connection now (its getBusInfo: [id, peer, direction, transport,
-        topic, connected, ...] per connection)."""
-        try:
-            info = self.recorder().getBusInfo(rospy.get_name())
-        except Exception:  # not registered yet, or the previous recorder's address
-            return set()
-        connections = info[2] if isinstance(info[0], int) else info
-        return {c[4] for c in connections if c[2] == "i" and c[5]}
+    def test_nothing_is_written_before_the_clock_is_valid(self):
+        self.assertEqual(self.written_before_clock, [])
 
-    def publish(self, count, step_s=0.01):
-        """``count`` messages on each topic, one round per clock step; returns the sim times of the rounds."""
-        times = []
-        for _ in range(count):
-            self.clock.step(step_s)
-            times.append(self.clock.now)
-            self.send_round()
-        return times
+    def test_a_clean_stop_renames_the_active_bags_promptly(self):
+        self.assertTrue(os.path.exists(self.bag))
+        self.assertFalse(os.path.exists(self.bag + ".active"))
+        self.assertGreaterEqual(len(self.split_bags), 2, self.split_bags)
+        for index, path in enumerate(self.split_bags):
+            self.assertEqual(path, "%s_%d.bag" % (self.split_stem, index))
+        for recorder, wall_s in self.stop_wall_s.items():
+            self.assertLess(wall_s, 1.0, "%s took %.3f s to stop" % (recorder, wall_s))  # 0.01 s when not loaded
 
-    def send_round(self):
-        self.publishers["/ardrone/imu"].publish(Imu())
-        self.publishers["/groundtruth/ardrone"].publish(PoseStamped())
-        self.publishers["/tf"].publish(TFMessage(transforms=[TransformStamped()]))
-        self.publishers["/not/recorded"].publish(String(data="x"))
+    def test_a_stopped_recorder_leaves_nothing_registered_at_the_master(self):
+        # roscpp's own /clock subscription and /rosout publication too: a warm graph's next recorder has the
+        # same name and waits until the previous one is gone from the master.
+        self.assertEqual(self.left_registered, [])
 
-    def stop(self, process, how=signal.SIGINT):
-        process.send_signal(how)
-        try:
-            code = process.wait(timeout=TIMEOUT)
-        except subprocess.TimeoutExpired:
-            self.fail("the recorder did not stop within %.0f s of %s" % (TIMEOUT, how))
-        return code, process.stderr.read()
+    def test_counts_and_types_per_topic(self):
+        with rosbag.Bag(self.bag) as bag:
+            topics = bag.get_type_and_topic_info().topics
+        self.assertEqual({t: (i.msg_type, i.message_count) for t, i in topics.items()}, {
+            IMU: ("sensor_msgs/Imu", ROUNDS), TWIST: ("geometry_msgs/Twist", ROUNDS),
+            LATCHED: ("std_msgs/String", 1)})
 
-    def counts(self, path):
-        with rosbag.Bag(path) as bag:
-            info = bag.get_type_and_topic_info().topics
-            return {topic: value.message_count for topic, value in info.items()}, \
-                [(topic, t.to_sec()) for topic, _, t in bag.read_messages()]
+    def test_messages_in_order_with_the_latched_one(self):
+        with rosbag.Bag(self.bag) as bag:
+            latched = [m.data for _, m, _ in bag.read_messages(topics=[LATCHED])]
+            sequence = [int(m.angular_velocity.x) for _, m, _ in bag.read_messages(topics=[IMU])]
+        self.assertEqual(latched, ["latched before the recorders subscribed"])
+        self.assertEqual(sequence, list(range(ROUNDS)))
 
-    def received(self):
-        """{topic: messages} the recorder's connections have received (its getBusStats: roscpp answers
-        [publications, subscriptions, services], a subscription's connection [id, bytes, messages, drops, ...])."""
-        try:
-            stats = self.recorder().getBusStats(rospy.get_name())
-        except Exception:  # not registered yet
-            return {}
-        subscriptions = stats[2][1] if isinstance(stats[0], int) else stats[1]
-        return {topic: sum(c[2] for c in connections) for topic, connections in subscriptions}
+    def test_receipt_times_are_sim_times(self):
+        with rosbag.Bag(self.bag) as bag:
+            for topic, message, receipt in bag.read_messages():
+                self.assertGreaterEqual(receipt.to_sec(), SIM_START_S, topic)
+                self.assertLessEqual(receipt, self.last_stamp + rospy.Duration(5.0), topic)
+                if topic == IMU:  # received after it was sent (on the clock the recorder had heard by then)
+                    delay_s = (receipt - message.header.stamp).to_sec()
+                    self.assertGreater(delay_s, -0.5, topic)
+                    self.assertLess(delay_s, 5.0, topic)
 
-    def stop_after_delivery(self, process, count, how=signal.SIGINT):
-        """Stop the recorder once its connections have received the ``count`` messages of each recorded topic (what
-        it received before the signal goes into the bag before it closes)."""
-        wait_for(lambda: all(self.received().get(t, 0) >= self.baseline[t] + count for t in RECORDED),
-                 "the recorder receiving %d messages on each of %s" % (count, ", ".join(RECORDED)), TIMEOUT,
-                 process=process)
-        return self.stop(process, how)
-
-    def test_1_records_the_wanted_topics_with_their_receipt_sim_times(self):
-        process = self.start()
-        times = self.publish(50)
-        code, errors = self.stop_after_delivery(process, 50)
-        self.assertEqual(code, 0, errors)
-        path = os.path.join(self.dir, "flight.bag")
-        self.assertTrue(os.path.isfile(path), "no %s after SIGINT (%s)" % (path, os.listdir(self.dir)))
-        self.assertFalse(os.path.exists(path + ".active"))
-        counts, records = self.counts(path)
-        self.assertEqual(counts, dict({t: self.baseline[t] + 50 for t in RECORDED}, **{"/tf_static": 1}))
-        received = [t for topic, t in records if topic != "/tf_static"][-150:]  # (the probes came before)
-        self.assertGreaterEqual(min(received), times[0] - 0.01 - 1e-6)  # (a message may arrive before its tick)
-        self.assertLessEqual(max(received), times[-1] + 1e-6)
-        self.assertGreater(len(set(received)), 10, "receipt times are the sim clock's, which moved")
-        with rosbag.Bag(path) as bag:
-            types = {t: v.msg_type for t, v in bag.get_type_and_topic_info().topics.items()}
-        self.assertEqual(types["/ardrone/imu"], "sensor_msgs/Imu")
-        self.assertEqual(types["/tf_static"], "tf2_msgs/TFMessage")
-
-    def test_2_splits_by_sim_time(self):
-        process = self.start("--split", "--duration=1")
-        self.publish(35, step_s=0.1)  # 3.5 s of sim time: 4 bags
-        code, errors = self.stop_after_delivery(process, 35)
-        self.assertEqual(code, 0, errors)
-        bags = sorted(f for f in os.listdir(self.dir))
-        self.assertEqual(bags, ["flight_0.bag", "flight_1.bag", "flight_2.bag", "flight_3.bag"])
-        total = sum(self.counts(os.path.join(self.dir, b))[0].get("/ardrone/imu", 0) for b in bags)
-        self.assertEqual(total, self.baseline["/ardrone/imu"] + 35)
-        for b in bags:
-            _, records = self.counts(os.path.join(self.dir, b))
-            times = [t for _, t in records]
+    def test_split_bags_hold_every_message_in_2_s_of_sim_time_each(self):
+        counts, previous_end = {}, None
+        for index, path in enumerate(self.split_bags):
+            with rosbag.Bag(path) as bag:
+                for topic, info in bag.get_type_and_topic_info().topics.items():
+                    counts[topic] = counts.get(topic, 0) + info.message_count
+                times = [t.to_sec() for _, _, t in bag.read_messages()]
+                latched = bag.get_message_count(topic_filters=[LATCHED])
+            self.assertEqual(latched, 1 if index == 0 else 0, path)  # as rosbag record without --repeat-latched
             if times:
-                self.assertLessEqual(max(times) - min(times), 1.0 + 1e-6, b)
+                # a little more when the bag was started by the idle check while older messages were queued
+                self.assertLessEqual(max(times) - min(times), SPLIT_S + 0.5, path)
+                if previous_end is not None:
+                    self.assertGreaterEqual(min(times), previous_end, path)
+                previous_end = max(times)
+        self.assertEqual(counts, {IMU: ROUNDS, TWIST: ROUNDS, LATCHED: 1})
 
-    def test_3_sigterm_closes_the_bag_too(self):
-        process = self.start()
-        self.publish(10)
-        code, errors = self.stop_after_delivery(process, 10, signal.SIGTERM)
-        self.assertEqual(code, 0, errors)
-        counts, _ = self.counts(os.path.join(self.dir, "flight.bag"))
-        self.assertEqual(counts["/ardrone/imu"], self.baseline["/ardrone/imu"] + 10)
-
-    def test_4_a_killed_recorder_leaves_its_complete_chunks(self):
-        process = self.start()
-        self.publish(600)  # Imu, PoseStamped and TFMessage: about 0.4 MB, some 12 chunks of 32 kB (uncompressed)
-        wait_for(lambda: all(self.received().get(t, 0) >= self.baseline[t] + 600 for t in RECORDED),
-                 "the recorder receiving it all",
-                 TIMEOUT, process=process)
-        process.kill()
-        process.wait(timeout=TIMEOUT)
-        active = os.path.join(self.dir, "flight.bag.active")
-        self.assertTrue(os.path.isfile(active), os.listdir(self.dir))
-        repaired = os.path.join(self.dir, "repaired.bag")
-        shutil.copy(active, repaired)
-        with rosbag.Bag(repaired, "a", allow_unindexed=True) as bag:
-            for _ in bag.reindex():
-                pass
-        counts, _ = self.counts(repaired)
-        # All but the last chunk (32 kB: about 50 rounds) and what stdio still held.
-        self.assertGreater(counts.get("/ardrone/imu", 0), self.baseline["/ardrone/imu"] + 500)
-
-    def test_5_a_bad_command_line_is_refused_with_the_reason(self):
-        bad = subprocess.run([self.record, "--size=10", "/tf"], capture_output=True, text=True, timeout=TIMEOUT)
-        self.assertEqual(bad.returncode, 2)
-        self.assertIn("unknown option '--size=10'", bad.stderr)
-        self.assertIn("usage:", bad.stderr)
-        nowhere = subprocess.run([self.record, "--output-name=/nonexistent/dir/x.bag", "/tf", "__name:=bad_recorder"],
-                                 capture_output=True, text=True, timeout=TIMEOUT)
-        self.assertEqual(nowhere.returncode, 1)
-        self.assertIn("cannot open the bag", nowhere.stderr)
+    def test_rosbags_reads_the_publishers_connection_headers(self):
+        with Reader(self.bag) as reader:
+            counts = {c.topic: c.msgcount for c in reader.connections}
+            headers = {c.topic: (c.msgtype, c.ext.callerid, c.ext.latching) for c in reader.connections}
+            self.assertEqual(sum(1 for _ in reader.messages()), 2 * ROUNDS + 1)
+        self.assertEqual(counts, {IMU: ROUNDS, TWIST: ROUNDS, LATCHED: 1})
+        self.assertEqual(headers[LATCHED], ("std_msgs/msg/String", rospy.get_name(), 1))
+        self.assertEqual(headers[IMU], ("sensor_msgs/msg/Imu", rospy.get_name(), 0))
 
 
 if __name__ == "__main__":

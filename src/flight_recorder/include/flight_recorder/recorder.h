@@ -1,76 +1,73 @@
-// The flight recorder: every wanted topic into a bag, each message written in the callback that receives it.
-//
-// Each message is written in roscpp's network thread as it is read off its connection (InlineCallbacks): no
-// spinner thread, no queue, no writer thread. rosbag record hands each message from that thread through a
-// MultiThreadedSpinner of ten threads and a queue to its writer thread; on a loaded 2-core machine those hand-offs
-// (a thread woken for each message) were most of its CPU.
 #pragma once
+// The recorder node: subscriptions whose callbacks, run by the main thread from the global callback queue,
+// write each message straight into the bag. No queue and no writer thread: rosbag record hands every message
+// from roscpp's poll thread to a spinner thread, a queue and a writer thread, and the switches between those
+// threads cost more CPU than the writing.
 
-#include <memory>
+#include <atomic>
+#include <condition_variable>
 #include <mutex>
 #include <set>
 #include <string>
 #include <vector>
 
-#include <ros/callback_queue_interface.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <topic_tools/shape_shifter.h>
 
-#include "flight_recorder/options.h"
+#include "flight_recorder/bag_files.h"
+#include "flight_recorder/recorder_options.h"
+#include "flight_recorder/topic_selection.h"
 
 namespace flight_recorder {
 
-// A callback "queue" that runs each callback at once, in the thread that adds it: for a subscription, roscpp's
-// network thread, as the message arrives.
-class InlineCallbacks : public ros::CallbackQueueInterface {
- public:
-  void addCallback(const ros::CallbackInterfacePtr& callback, uint64_t owner_id) override;
-  void removeByID(uint64_t) override {}
-};
-
 class Recorder {
  public:
-  Recorder(const Options& options, ros::NodeHandle& node);
-  ~Recorder();
+  explicit Recorder(const RecorderOptions& options);
 
-  // Opens the first bag and subscribes to the wanted topics advertised now, then looks for more on a wall
-  // timer (sim time may stand still until the recorder has subscribed). Throws rosbag::BagException when the
-  // bag cannot be opened.
-  void start();
-  // Closes the bag (NAME.bag.active becomes NAME.bag); a second call does nothing.
-  void close();
-  // Whether recording is over by itself: --duration reached (without --split), or a bag could not be written.
-  bool finished() const { return finished_; }
-  // Why recording stopped early (a bag that could not be written), or "".
-  const std::string& failure() const { return failure_; }
+  // Records until requestStop(), a ROS shutdown (rosnode kill, the master) or --duration without --split,
+  // then closes the bag. Returns the exit code: 0, or 1 when the bag could not be opened or written.
+  int run();
+
+  // From any thread: stop at the next callback boundary, closing the bag. Wakes the main thread at once.
+  void requestStop();
 
  private:
-  void discover();
+  int record();  // run() without the unsubscribing
+  void discoverTopics();
   void subscribe(const std::string& topic);
-  void onMessage(const ros::MessageEvent<topic_tools::ShapeShifter const>& event, const std::string& topic);
-  void openBag();
+  void onMessage(const ros::MessageEvent<const topic_tools::ShapeShifter>& event, const std::string& topic);
+  void onDiscoveryTimer(const ros::WallTimerEvent&);
+  bool waitForValidTime();
+  bool openBag();
   void closeBag();
-  void fail(const std::string& what);
+  // Closes the bag and opens the next one for each --duration that ROS time `now` has passed.
+  void splitIfDue(const ros::Time& now);
+  void fail(const std::string& message);
 
-  Options options_;
-  TopicFilter filter_;
-  InlineCallbacks inline_callbacks_;
-  std::mutex bag_mutex_;     // the network thread writes, the main thread (discovery, the stop) closes
-  ros::NodeHandle& node_;
-  rosbag::Bag bag_;
-  bool open_ = false;
-  std::string bag_name_;
-  std::string date_;         // the recording's start (local time), in a prefixed bag's name
-  int split_index_ = 0;
-  ros::Time span_start_;     // ROS time the current bag's span began (--split, --duration)
-  std::set<std::string> subscribed_;
+  RecorderOptions options_;
+  TopicSelection selection_;
+  ros::NodeHandle node_;
   std::vector<ros::Subscriber> subscribers_;
-  ros::WallTimer discovery_;
+  std::set<std::string> subscribed_topics_;
+  ros::WallTimer discovery_timer_;
   ros::WallTime started_;
-  bool discovering_fast_ = true;
-  bool finished_ = false;
-  std::string failure_;
+  double discovery_period_s_ = 0.0;
+
+  rosbag::Bag bag_;
+  std::string bag_name_;  // the closed bag's name; bag_ writes activeBagName(bag_name_)
+  unsigned split_index_ = 0;
+  SplitSchedule split_schedule_;
+
+  std::atomic<bool> stop_requested_{false};
+  std::mutex stop_mutex_;
+  std::condition_variable stop_condition_;
+  int exit_code_ = 0;
 };
+
+// The end of the recorder's process, after run(): unregisters its /rosout publication and its services from the
+// master and exits without ros::shutdown(), which takes 0.2-0.3 s joining roscpp's threads (each wakes every
+// 0.1 s) while the caller waits for the process to end.
+[[noreturn]] void leaveGraphAndExit(int exit_code);
 
 }  // namespace flight_recorder
