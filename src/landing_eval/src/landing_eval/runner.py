@@ -89,7 +89,7 @@ def launch_arguments(s):
 
 
 def recorder_command(bag, split_s=0):
-    """(command, environment) of the flight recorder (flight_recorder's record: rosbag record's options, 0.6 of its CPU
+    """(command, environment) of the flight recorder (flight_recorder's record: rosbag record's options, half its CPU
     per message) of the topics interface/record.launch records (its record_regex, in its chunk_kb chunks, with its
     allocator and settings), started directly: through a second roslaunch it took 0.4 s longer to start and to stop,
     through rosrun (a shell script that runs catkin_find) 0.2 s longer to start. With ``split_s`` > 0 a new bag every
