@@ -65,9 +65,10 @@ class Recorder {
   int exit_code_ = 0;
 };
 
-// The end of the recorder's process, after run(): unregisters its /rosout publication and its services from the
-// master and exits without ros::shutdown(), which takes 0.2-0.3 s joining roscpp's threads (each wakes every
-// 0.1 s) while the caller waits for the process to end.
+// The end of the recorder's process, after run(): unregisters what is left of it at the master (roscpp's own
+// /rosout publication and, under /use_sim_time, /clock subscription; its services) and exits without
+// ros::shutdown(), which takes 0.2-0.3 s joining roscpp's threads (each wakes every 0.1 s) while the caller waits
+// for the process to end.
 [[noreturn]] void leaveGraphAndExit(int exit_code);
 
 }  // namespace flight_recorder
