@@ -20,5 +20,7 @@ fi
 tail -n 1 logs/catkin_test_results.log
 
 echo "== pytest (unit and system tests)"
-python -m pytest -q -rs -p no:cacheprovider src/*/test tests || status=1  # -rs: why anything skipped
+python -m pytest -q -rs -p no:cacheprovider --junitxml=logs/pytest.xml src/*/test tests || status=1  # -rs: why skipped
+# last, so that the tail of the output (all that CI shows) names what failed
+[ $status -eq 0 ] || python tests/list_failures.py build/test_results logs/pytest.xml
 exit $status
