@@ -80,15 +80,31 @@ def ros_env(tmp_path_factory):
         stop(core)
 
 
+# A supervisor stand-in: its latched mode tells a console script that the supervisor is up (console.py
+# wait_for_listeners), and what reaches operator/command is printed, one line per command. A typed subscriber:
+# rostopic echo would wait for a publisher to learn the type, and miss the first ones.
+COMMAND_LISTENER = """
+import rospy
+from std_msgs.msg import String
+rospy.init_node("command_listener", anonymous=True)
+rospy.Subscriber("/operator/command", String, lambda m: print(m.data, flush=True))
+mode = rospy.Publisher("/supervisor/mode", String, queue_size=1, latch=True)
+mode.publish(String(data="idle"))
+rospy.spin()
+"""
+
+
+def start_command_listener(ros_env):
+    """The stand-in's process and a reader of what it printed."""
+    echo = subprocess.Popen([sys.executable, "-c", COMMAND_LISTENER], env=ros_env, stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, start_new_session=True)
+    return echo, Lines(echo.stdout.fileno())
+
+
 @pytest.fixture
 def operator_commands(ros_env):
     """What reaches operator/command, one line per command."""
-    # a typed subscriber (rostopic echo would wait for a publisher to learn the type, and miss the first ones)
-    listener = ("import rospy; from std_msgs.msg import String; rospy.init_node('command_listener', anonymous=True); "
-                "rospy.Subscriber('/operator/command', String, lambda m: print(m.data, flush=True)); rospy.spin()")
-    echo = subprocess.Popen([sys.executable, "-c", listener], env=ros_env, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, start_new_session=True)
-    reader = Lines(echo.stdout.fileno())
+    echo, reader = start_command_listener(ros_env)
     yield reader
     stop(echo)
 
@@ -133,6 +149,27 @@ def test_commands_as_arguments_without_a_terminal(ros_env, operator_commands):
     wait_for(lambda: "emergency" in operator_commands.read() and "quit" in operator_commands.text,
              "emergency and quit on operator/command")
     assert "dance" not in operator_commands.text
+
+
+def test_scripted_commands_wait_for_a_supervisor_that_starts_later(ros_env):
+    """Sent before the supervisor has subscribed, a scripted command was lost (the flight_management_timer rostest
+    timed out waiting for its Start when the supervisor came up late): the console now waits for it."""
+    console = subprocess.Popen([sys.executable, CONSOLE, "--plain", "--commands", "start;quit"],
+                               env=dict(ros_env, CONSOLE_NO_STDIN="1"), stdin=subprocess.DEVNULL,
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
+    echo = None
+    try:
+        screen = Lines(console.stdout.fileno())
+        wait_for(lambda: "actions:" in screen.read(), "the console's panel, with no supervisor yet")
+        echo, commands = start_command_listener(ros_env)
+        wait_for(lambda: (screen.read(), console.poll() is not None)[1], "the console to quit once heard")
+        assert console.returncode == 0, screen.text[-2000:]
+        wait_for(lambda: "quit" in commands.read(), "operator/command quit")
+        assert commands.text.split() == ["start", "quit"]
+    finally:
+        stop(console)
+        if echo is not None:
+            stop(echo)
 
 
 # The supervisor in the landing mode (latched) and the sonar at 20 Hz (wall time: no /use_sim_time here).

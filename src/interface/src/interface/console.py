@@ -18,6 +18,7 @@ from .console_model import MANUAL_CONSOLE_KEYS, PANEL, ConsoleModel, Screen, pan
 SENSOR_TOPICS = {"camera": "ardrone/bottom/camera_info", "imu": "ardrone/imu", "odometry": "ardrone/gps/odom",
                  "sonar": "ardrone/sonar_height"}
 SENSOR_TIMEOUT_S = 1.0  # a sensor silent for longer (sim time) is shown as missing
+SCRIPT_LISTENER_WAIT_S = 30.0  # how long a scripted command waits for the supervisor to listen (wall time) [s]
 
 
 def _answer_text(warning, sim_time):
@@ -93,7 +94,9 @@ class ConsoleNode:
         self.last_seen = {}
         # synchronous (no queue): a command is on the wire when publish returns, even if we quit next
         self.publisher = rospy.Publisher("operator/command", String, queue_size=None)
-        rospy.Subscriber("supervisor/mode", String, lambda m: self._set(mode=m.data))
+        self.supervisor_heard = threading.Event()  # supervisor/mode (latched) received: the supervisor is up
+        self.listeners_given_up = False
+        rospy.Subscriber("supervisor/mode", String, self._on_mode)
         rospy.Subscriber("platform_tracking/state", String, lambda m: self._set(tracker_state=m.data))
         rospy.Subscriber("supervisor/decisions", String, self._on_decision)
         rospy.Subscriber("supervisor/warning", String, self._on_warning)
@@ -121,6 +124,10 @@ class ConsoleNode:
         with self.lock:
             for key, value in values.items():
                 setattr(self.model, key, value)
+
+    def _on_mode(self, msg):
+        self._set(mode=msg.data)
+        self.supervisor_heard.set()
 
     def _seen(self, name):
         def callback(_):
@@ -182,22 +189,36 @@ class ConsoleNode:
                 self.model.set_sensor(name, seen is not None and now - seen <= SENSOR_TIMEOUT_S)
         return now
 
-    def wait_for_listeners(self, timeout_s=5.0):
-        """Wait (wall time) until every subscriber the master knows of is connected, so scripted
-        commands sent right after start are not lost; gives up quietly when nobody listens."""
+    def wait_for_listeners(self, timeout_s=SCRIPT_LISTENER_WAIT_S):
+        """Wait (wall time) before a scripted command until the supervisor is up (heard on supervisor/mode) and
+        every subscriber of operator/command the master lists is connected: sent before, the command would be
+        lost (a script's sim-time waits may end before a slow supervisor has subscribed). After timeout_s it
+        warns and lets this and every later command go out without waiting."""
         import rosgraph
+        if self.listeners_given_up:
+            return
         master = rosgraph.Master(self.rospy.get_name())
         topic = self.publisher.resolved_name
         deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            try:
-                _, subscribers, _ = master.getSystemState()
-            except Exception:  # master busy or gone: do not block the console on it
-                return
-            expected = sum(len(nodes) for name, nodes in subscribers if name == topic)
-            if self.publisher.get_num_connections() >= expected:
-                return
+        expected = None
+        while True:
+            if self.supervisor_heard.is_set():
+                try:
+                    _, subscribers, _ = master.getSystemState()
+                except Exception:  # master busy or gone: do not block the console on it
+                    return
+                expected = sum(len(nodes) for name, nodes in subscribers if name == topic)
+                if self.publisher.get_num_connections() >= expected:
+                    return
+            if time.monotonic() > deadline:
+                break
             time.sleep(0.05)
+        self.listeners_given_up = True
+        missing = ("nothing on %s in %.0f s: is the supervisor running?" % (
+            self.rospy.resolve_name("supervisor/mode"), timeout_s)
+                   if expected is None else "%d of the %d subscribers of %s connected after %.0f s" % (
+                       self.publisher.get_num_connections(), expected, topic, timeout_s))
+        self.rospy.logwarn("console: %s Sending the scripted commands anyway, some may be lost.", missing)
 
     def key(self, key):
         """One key typed in the terminal: in Manual Control the teleop's, else the console's."""
@@ -309,19 +330,21 @@ def main(argv=None):
     if teleop is not None:
         threading.Thread(target=node.fly, args=(stop, teleop_rate), daemon=True).start()
 
+    def scripted_command(text):  # from --commands or piped lines: nobody watches whether it was heard
+        node.wait_for_listeners()
+        node.command(text)
+
     def run_script():
-        if args.commands:
-            node.wait_for_listeners()
         for item in filter(None, (c.strip() for c in args.commands.split(";"))):
             if item.startswith("wait"):
                 end = rospy.get_time() + float(item.split()[1])
                 while rospy.get_time() < end and not stop.is_set():
                     time.sleep(0.05)
             else:
-                node.command(item)
+                scripted_command(item)
     threading.Thread(target=run_script, daemon=True).start()
     reader = threading.Thread(target=_read_keys if interactive else _read_lines,
-                              args=(node.key if interactive else node.command, stop), daemon=True)
+                              args=(node.key if interactive else scripted_command, stop), daemon=True)
     if interactive or not os.environ.get("CONSOLE_NO_STDIN"):
         reader.start()
     try:
