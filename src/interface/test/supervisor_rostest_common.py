@@ -32,11 +32,13 @@ class Harness:
         self.decisions, self.positions, self.tracker_commands, self.land_times = [], [], [], []
         self.navdata_log = []        # (sim time, state)
         self.mode, self.warning, self.landing_allowed, self.emergency_state = None, None, None, None
+        self.auto_takeoff_at = None  # the first countdown end announced on supervisor/flight_management [sim s]
         self.navdata, self.truth, self.touchdown = None, None, None
         self.tracker_twist = None    # what the stand-in tracker publishes, None = silent
         sub = rospy.Subscriber
         sub("/supervisor/decisions", String, self._on_decision, queue_size=100)
         sub("/supervisor/mode", String, lambda m: setattr(self, "mode", m.data))
+        sub("/supervisor/flight_management", String, self._on_flight_management, queue_size=10)
         sub("/supervisor/warning", String, lambda m: setattr(self, "warning", json.loads(m.data)))
         sub("/landing_allowed", Bool, lambda m: setattr(self, "landing_allowed", m.data))
         sub("/emergency/state", String, lambda m: setattr(self, "emergency_state", m.data))
@@ -53,11 +55,19 @@ class Harness:
         self.wait_for(lambda: rospy.get_time() > 0.5 and self.mode is not None and self.navdata is not None,
                       "the simulator clock, supervisor/mode and ardrone/navdata")
         self.wait_for(lambda: self.operator.get_num_connections() >= 2, "supervisor and emergency on operator/command")
+        # a take-off published before the simulator has connected would be lost
+        self.wait_for(lambda: self.takeoff_pub.get_num_connections() >= 1, "the simulator on /ardrone/takeoff")
+        self.up_at = rospy.get_time()  # the supervisor was up (its latched mode heard) by this sim time
 
     # ----- inputs ------------------------------------------------------------------------------------
     def _on_decision(self, msg):
         with self.lock:
             self.decisions.append(json.loads(msg.data))
+
+    def _on_flight_management(self, msg):
+        announced = json.loads(msg.data).get("auto_takeoff_at")
+        if self.auto_takeoff_at is None and announced is not None:
+            self.auto_takeoff_at = announced
 
     def _on_position(self, msg):
         with self.lock:
