@@ -69,7 +69,7 @@ class Driver(threading.Thread):
         self.frame = 0
         self.nan_pending = False
         self.nan_sent_at = None
-        self.last_detection = None   # stamp of the last detection published [s]
+        self.last_detection = None   # stamp of the last detection published or being published [s]
         self.first_after_resume = None
         self.rng = random.Random(7)
 
@@ -86,6 +86,13 @@ class Driver(threading.Thread):
                 detecting, send_nan, gps = self.detecting, self.nan_pending, self.gps
                 self.nan_pending = False
                 self.frame += 1
+                if detecting:  # noted under the lock that decided it: a test that stops detections sees it
+                    if send_nan:
+                        self.nan_sent_at = t
+                    if self.first_after_resume is None and self.last_detection is not None and \
+                            t - self.last_detection > 1.5 / CAMERA_RATE:
+                        self.first_after_resume = t
+                    self.last_detection = t
             try:
                 if gps and self.frame % int(round(CAMERA_RATE / GPS_RATE)) == 0:
                     self.publish_gps(t)
@@ -120,13 +127,6 @@ class Driver(threading.Thread):
         if send_nan:
             msg.point.x = float("nan")
         self.detection_pub.publish(msg)
-        with self.lock:
-            if send_nan:
-                self.nan_sent_at = t
-            if self.first_after_resume is None and self.last_detection is not None and \
-                    t - self.last_detection > 1.5 / CAMERA_RATE:
-                self.first_after_resume = t
-            self.last_detection = t
 
 
 class KalmanPredictionTest(unittest.TestCase):
