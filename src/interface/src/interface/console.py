@@ -194,30 +194,29 @@ class ConsoleNode:
         every subscriber of operator/command the master lists is connected: sent before, the command would be
         lost (a script's sim-time waits may end before a slow supervisor has subscribed). After timeout_s it
         warns and lets this and every later command go out without waiting."""
-        import rosgraph
+        from landing_msgs.rospy_node import unconnected_subscribers
         if self.listeners_given_up:
             return
-        master = rosgraph.Master(self.rospy.get_name())
-        topic = self.publisher.resolved_name
         deadline = time.monotonic() + timeout_s
-        expected = None
+        unconnected = None
         while True:
             if self.supervisor_heard.is_set():
                 try:
-                    _, subscribers, _ = master.getSystemState()
+                    unconnected = unconnected_subscribers(self.publisher)
                 except Exception:  # master busy or gone: do not block the console on it
                     return
-                expected = sum(len(nodes) for name, nodes in subscribers if name == topic)
-                if self.publisher.get_num_connections() >= expected:
+                if not unconnected:
                     return
             if time.monotonic() > deadline:
                 break
             time.sleep(0.05)
         self.listeners_given_up = True
-        missing = ("nothing on %s in %.0f s: is the supervisor running?" % (
-            self.rospy.resolve_name("supervisor/mode"), timeout_s)
-                   if expected is None else "%d of the %d subscribers of %s connected after %.0f s" % (
-                       self.publisher.get_num_connections(), expected, topic, timeout_s))
+        if unconnected is None:
+            missing = "nothing on %s in %.0f s: is the supervisor running?" % (
+                self.rospy.resolve_name("supervisor/mode"), timeout_s)
+        else:
+            missing = "%d subscribers of %s not connected after %.0f s." % (
+                unconnected, self.publisher.resolved_name, timeout_s)
         self.rospy.logwarn("console: %s Sending the scripted commands anyway, some may be lost.", missing)
 
     def key(self, key):

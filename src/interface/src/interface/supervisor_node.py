@@ -27,7 +27,6 @@ import sys
 import threading
 import time
 
-import rosgraph
 from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem, first_problem,
                                       frame_problem, numbers_problem, stamp_problem)
 from platform_tracking.state_machine import State as TrackerState
@@ -37,7 +36,7 @@ from rospy.impl.paramserver import get_param_server_cache
 from landing_msgs.lockstep import LockstepAcker
 from landing_msgs.msg import Navdata
 from geometry_msgs.msg import PointStamped
-from landing_msgs.rospy_node import NodeHandles, run_node
+from landing_msgs.rospy_node import NodeHandles, run_node, unconnected_subscribers
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger, TriggerResponse
@@ -224,8 +223,7 @@ class SupervisorNode:
             return True
         if time.monotonic() < self.decisions_wait_until:
             try:
-                subscribers = dict(rosgraph.Master(rospy.get_name()).getSystemState()[1])
-                if self.pub_decisions.get_num_connections() < len(subscribers.get(self.pub_decisions.resolved_name, [])):
+                if unconnected_subscribers(self.pub_decisions):
                     return False
             except Exception:  # the master is gone: nothing more will connect
                 pass

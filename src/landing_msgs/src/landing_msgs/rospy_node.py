@@ -68,6 +68,15 @@ def direct_publisher(topic, data_class, latch=False):
         return without_nagle(rospy.Publisher(topic, data_class, queue_size=None, latch=latch))
 
 
+def unconnected_subscribers(publisher):
+    """How many of the subscribers the master lists for ``publisher``'s topic it is not connected to yet: one
+    that has registered but not connected would miss a message published now. Raises what the master call
+    raises (the master busy or gone)."""
+    import rosgraph
+    listed = dict(rosgraph.Master(rospy.get_name()).getSystemState()[1]).get(publisher.resolved_name, [])
+    return max(0, len(listed) - publisher.get_num_connections())
+
+
 class _NoDelayListener(rospy.SubscribeListener):
     def __init__(self, publisher):
         super().__init__()
