@@ -256,8 +256,15 @@ class NodeInputsTest(unittest.TestCase):
         at the same stamp. The pad 20 px right of the image centre is to the drone's right: along world -y by the
         IMU, along world +x by the corrected heading, which the world fix follows."""
         offsets = {}
+        # A frame that arrives before its own odometry is placed with the nearest estimate within odom_timeout:
+        # the turns' stamps lie further apart than that, so such a frame gets the relative position only (and
+        # is sent again), never the other turn's heading.
+        apart = rospy.Duration(rospy.get_param("/platform_detection/timing/odom_timeout") + 0.1)
+        previous = None
         for turn in (0.0, np.pi / 2):
-            stamp = rospy.Time.now()
+            if previous is not None:
+                wait_for(lambda: rospy.Time.now() > previous + apart, "the clock to pass the odometry timeout")
+            stamp = previous = rospy.Time.now()
             self.publish_sensors(stamp)
             odom = Odometry()
             odom.header.stamp, odom.header.frame_id = stamp, "world"
