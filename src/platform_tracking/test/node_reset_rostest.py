@@ -168,10 +168,15 @@ class NodeResetTest(unittest.TestCase):
                 "takeoffs": sum(1 for t in self.takeoffs if start < t <= entered + 0.5),
                 "first command": (first.linear.x, first.linear.y, round(first.linear.z, 6), first.angular.z)}
 
-    def command_rate(self, seconds=2.0):
+    def assertTickRate(self, rate_hz, seconds=3.0):
+        """The tracker ticks at ``rate_hz`` (its velocity commands counted over ``seconds`` of sim time), not at the
+        shipped 30 Hz. Below it by up to 4 Hz: a timer more than two periods late skips its ticks (rospy.Rate), and
+        on a loaded machine the tracker lags this test's wall-paced clock now and then."""
         start = rospy.get_time()
         self.sim_wait(seconds)
-        return sum(1 for t, _m in self.commands if start < t <= start + seconds) / seconds
+        measured = sum(1 for t, _m in self.commands if start < t <= start + seconds) / seconds
+        self.assertLessEqual(measured, rate_hz + 0.5)
+        self.assertGreaterEqual(measured, rate_hz - 4.0)
 
     def estimates_after(self, t):
         return [m for m in self.estimates if m.header.stamp.to_sec() > t]
@@ -251,7 +256,7 @@ class NodeResetTest(unittest.TestCase):
         self.assertAlmostEqual(self.estimates[-1].twist.covariance[0], 0.2 ** 2)
         self.assertEqual(self.take_off()["first command"], (0.0, 0.0, 0.6, 0.0))
         self.world.nav_state = Navdata.STATE_FLYING  # climbing on, at the new rate
-        self.assertAlmostEqual(self.command_rate(), 20.0, delta=2.0)
+        self.assertTickRate(20.0)
 
     def test_5_a_bad_parameter_is_refused_and_the_node_goes_on(self):
         self.assertEqual(self.state(), "TAKING_OFF")
@@ -266,7 +271,7 @@ class NodeResetTest(unittest.TestCase):
         # Both go on as they were: climbing at 0.6 m/s, 20 times a second, the state latched; the flow noise 0.2.
         self.assertEqual(self.latched("platform_tracking/state"), ["TAKING_OFF"])
         self.assertEqual(len(self.states), states_before)
-        self.assertAlmostEqual(self.command_rate(), 20.0, delta=2.0)
+        self.assertTickRate(20.0)
         self.assertAlmostEqual(self.commands[-1][1].linear.z, 0.6)
         checked_at = rospy.get_time()
         self.wait_for(lambda: self.estimates_after(checked_at), "estimates")
