@@ -91,6 +91,7 @@ class NodeInputsTest(unittest.TestCase):
         cls.points = []
         cls.world_points = []
         cls.warnings = []
+        cls.info_chasers = 0  # camera_info messages sent to prove the one before arrived (camera_info_arrived)
         rospy.Subscriber("/platform/current_platform_position_in_ardrone", PointStamped, cls.points.append)
         rospy.Subscriber("/platform/current_platform_position_in_world", PointStamped, cls.world_points.append)
         rospy.Subscriber("/rosout", Log, lambda m: cls.warnings.append(m.msg) if m.level >= Log.WARN else None,
@@ -121,23 +122,38 @@ class NodeInputsTest(unittest.TestCase):
         alt.header.stamp = stamp
         self.pub["altimeter"].publish(alt)
 
-    def detect_once(self, image=None, distortion=(0.0,) * 5, stamp=None, publish_sensors=True, info=True):
-        """A good frame with good sensors (``info`` False: all but camera_info): returns the published pad
-        position. The frame is sent again until its result comes, as the sensor messages travel on other
-        connections and may arrive later."""
+    def detect_once(self, image=None, distortion=(0.0,) * 5, stamp=None, publish_sensors=True, info=True,
+                    accept=lambda point: True, what="the pad position of a good frame"):
+        """A good frame with good sensors (``info`` False: all but camera_info): returns the first published pad
+        position of its stamp that ``accept`` takes. The frame is sent again until it comes, as the sensor
+        messages travel on other connections and may arrive later. A camera_info sent is known to have arrived
+        before the frame (a frame would otherwise be measured with the lens of the one before)."""
         stamp = stamp or rospy.Time.now()
         if publish_sensors:
             self.publish_sensors(stamp, distortion=distortion, info=info)
+            if info:
+                self.camera_info_arrived()
         frame = image_msg(stamp, pad_image() if image is None else image)
         last_sent = [0.0]
+
+        def first_accepted():
+            return next((p for p in self.points if p.header.stamp == stamp and accept(p)), None)
 
         def detected():
             if time.monotonic() - last_sent[0] > 0.2:
                 self.pub["image"].publish(frame)
                 last_sent[0] = time.monotonic()
-            return any(p.header.stamp == stamp for p in self.points)
-        wait_for(detected, "the pad position of a good frame")
-        return next(p for p in self.points if p.header.stamp == stamp)
+            return first_accepted() is not None
+        wait_for(detected, what)
+        return first_accepted()
+
+    def camera_info_arrived(self):
+        """Proves that the camera_info sent last has arrived: one sent after it on the same connection, with a
+        negative focal length of its own, is dropped with a warning naming that focal length."""
+        type(self).info_chasers += 1
+        fx = -float(type(self).info_chasers)
+        self.expect_warning(self.pub["info"], camera_info(rospy.Time.now(), fx=fx), "camera_info: dropped",
+                            "(fx=%g," % fx)
 
     def expect_warning(self, publisher, message, *words):
         """Publish a bad ``message`` and wait for the warning it causes. Only warnings that arrive after it was
@@ -243,9 +259,12 @@ class NodeInputsTest(unittest.TestCase):
         for offset in (0.15, 0.19):
             self.publish_sensors(taken + rospy.Duration(offset), sonar=CAMERA_HEIGHT - 0.03 + 0.3,
                                  altitude=CAMERA_HEIGHT + 0.035 + PAD_TOP + 0.3)
-        # A frame taken after the climb proves the new readings have arrived (and are used for it) ...
-        climbed = self.detect_once(stamp=taken + rospy.Duration(0.19), publish_sensors=False)
-        self.assertAlmostEqual(climbed.point.y, -20.0 / FX * (CAMERA_HEIGHT + 0.3), delta=0.004)
+        # A frame taken after the climb measured with the new height proves the new readings have arrived (a
+        # frame that overtook them on its own connection is measured with the ones before: sent again) ...
+        climbed_y = -20.0 / FX * (CAMERA_HEIGHT + 0.3)
+        self.detect_once(stamp=taken + rospy.Duration(0.19), publish_sensors=False,
+                         accept=lambda p: abs(p.point.y - climbed_y) < 0.004,
+                         what="a frame taken after the climb measured with the new height")
         # ... and the late frame is measured with the height of its own time.
         point = self.detect_once(stamp=taken, publish_sensors=False)
         self.assertAlmostEqual(point.point.y, -20.0 / FX * CAMERA_HEIGHT, delta=0.004)
@@ -256,16 +275,20 @@ class NodeInputsTest(unittest.TestCase):
         at the same stamp. The pad 20 px right of the image centre is to the drone's right: along world -y by the
         IMU, along world +x by the corrected heading, which the world fix follows."""
         offsets = {}
-        # A frame that arrives before its own odometry is placed with the nearest estimate within odom_timeout:
-        # the turns' stamps lie further apart than that, so such a frame gets the relative position only (and
-        # is sent again), never the other turn's heading.
+        # Each message travels on its own connection, so the order they arrive in is the test's to prove:
+        # - an odometry that comes before its stamp's IMU reading is stored without the heading correction (the
+        #   estimate's heading minus the IMU's yaw): the frame's fix relative to the drone, which needs that
+        #   reading, comes first;
+        # - a frame that comes before its own odometry is placed with the nearest estimate within odom_timeout:
+        #   the turns' stamps lie further apart than that, so such a frame gets the relative position only (and
+        #   is sent again), never the other turn's heading.
         apart = rospy.Duration(rospy.get_param("/platform_detection/timing/odom_timeout") + 0.1)
         previous = None
         for turn in (0.0, np.pi / 2):
             if previous is not None:
                 wait_for(lambda: rospy.Time.now() > previous + apart, "the clock to pass the odometry timeout")
             stamp = previous = rospy.Time.now()
-            self.publish_sensors(stamp)
+            self.detect_once(stamp=stamp)
             odom = Odometry()
             odom.header.stamp, odom.header.frame_id = stamp, "world"
             odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z = 1.0, 2.0, 3.0
@@ -275,8 +298,8 @@ class NodeInputsTest(unittest.TestCase):
             last_sent = [0.0]
 
             def sent_and_received(odom=odom, frame=frame, stamp=stamp):
-                # Sent again every 0.2 s: the odometry and the frame travel on their own connections, and a frame
-                # that came first is published relative to the drone only.
+                # Sent again every 0.2 s: a frame that came before the odometry is published relative to the drone
+                # only.
                 if time.monotonic() - last_sent[0] > 0.2:
                     self.pub["odom"].publish(odom)
                     self.pub["image"].publish(frame)
