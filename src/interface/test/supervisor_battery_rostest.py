@@ -60,7 +60,9 @@ class BatteryEmergencyTest(unittest.TestCase):
                    "emergency/position after the touchdown")
         reports = [p for p in h.positions if p[0] >= t0]
         gaps = [b[0] - a[0] for a, b in zip(reports, reports[1:])]
-        self.assertLess(max(gaps), 1.3, "emergency/position is not published every second")
+        # Received times (the message has no stamp) at 2x real time: a stall of this process for 0.25 s of wall
+        # time on a loaded machine is 0.5 s here; a report missed would make a gap of 2 s.
+        self.assertLess(max(gaps), 1.5, "emergency/position is not published every second")
         error = h.horizontal_error(h.positions[-1])
         rospy.loginfo("emergency/position (%.2f, %.2f): %.3f m from the ground truth", h.positions[-1][1],
                       h.positions[-1][2], error)
@@ -71,7 +73,9 @@ class BatteryEmergencyTest(unittest.TestCase):
         h.command("ack")
         h.wait_for(lambda: h.mode == "landed", "supervisor/mode landed after the ack")
         h.sim_wait(2.5)
-        self.assertFalse([p for p in h.positions if p[0] > t_ack + 0.2], "position still reported after the ack")
+        # The ack is applied at the emergency module's next tick (10 Hz) and a report sent just before it may be
+        # received late: the one a second later must not come.
+        self.assertFalse([p for p in h.positions if p[0] > t_ack + 0.5], "position still reported after the ack")
 
 
 if __name__ == "__main__":

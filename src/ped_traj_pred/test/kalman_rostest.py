@@ -58,7 +58,9 @@ class Driver(threading.Thread):
 
     def __init__(self):
         super().__init__(daemon=True)
-        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=10)
+        # Without Nagle's algorithm, as the detections: a tick held back for a delayed ACK could reach the node
+        # after the detection of the next instant (a path stamped before the detections resumed, in test_3).
+        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=10, tcp_nodelay=True)
         self.detection_pub = rospy.Publisher("/platform/current_platform_position_in_world", PointStamped,
                                              queue_size=100, tcp_nodelay=True)
         self.gps_pub = rospy.Publisher("/summit_xl/gps/odom", Odometry, queue_size=10)
