@@ -21,6 +21,7 @@ from geometry_msgs.msg import PointStamped
 from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock, Log
 from landing_msgs import testing
+from landing_msgs.rospy_node import without_nagle
 
 NODE = "/prediction_kalman_node"
 RADIUS, SPEED, PAD_HEIGHT = 10.0, 3.0, 0.497  # [m], [m/s], [m]
@@ -58,9 +59,10 @@ class Driver(threading.Thread):
 
     def __init__(self):
         super().__init__(daemon=True)
-        # Without Nagle's algorithm, as the detections: a tick held back for a delayed ACK could reach the node
-        # after the detection of the next instant (a path stamped before the detections resumed, in test_3).
-        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=10, tcp_nodelay=True)
+        # Without Nagle's algorithm (the node's own /clock subscription does not ask for TCP_NODELAY): a tick held
+        # back for a delayed ACK could reach the node after the detection of the next instant (a path stamped
+        # before the detections resumed, in test_3).
+        self.clock_pub = without_nagle(rospy.Publisher("/clock", Clock, queue_size=10))
         self.detection_pub = rospy.Publisher("/platform/current_platform_position_in_world", PointStamped,
                                              queue_size=100, tcp_nodelay=True)
         self.gps_pub = rospy.Publisher("/summit_xl/gps/odom", Odometry, queue_size=10)

@@ -10,6 +10,7 @@ import rospy
 import rostest
 from geometry_msgs.msg import Twist
 from landing_msgs import testing
+from landing_msgs.rospy_node import without_nagle
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Empty
 from std_srvs.srv import Trigger
@@ -27,7 +28,7 @@ class SummitMovesResetTest(unittest.TestCase):
         rospy.init_node("test_summit_moves_reset")
         cls.commands = []  # (speed, yaw rate) as published
         cls.stop = threading.Event()
-        cls.clock = rospy.Publisher("/clock", Clock, queue_size=1, tcp_nodelay=True)  # no tick held for an ACK
+        cls.clock = without_nagle(rospy.Publisher("/clock", Clock, queue_size=1))  # no tick held for an ACK
         threading.Thread(target=cls._run_clock, daemon=True).start()
         rospy.Subscriber("/summit_xl_control/cmd_vel", Twist,
                          lambda m: cls.commands.append((round(m.linear.x, 6), round(m.angular.z, 6))), queue_size=100)

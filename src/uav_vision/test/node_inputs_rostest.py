@@ -8,7 +8,6 @@ subscribed; a missing parameter stops the node with a message naming it."""
 import functools
 import os
 import subprocess
-import time
 import unittest
 
 import cv2
@@ -30,6 +29,7 @@ PAD_TOP = 0.497
 
 
 wait_for = functools.partial(testing.wait_for, timeout=WALL_TIMEOUT)
+resend_until = functools.partial(testing.resend_until, timeout=WALL_TIMEOUT)
 
 
 def pad_image(width=320, height=240, right=20, down=0):
@@ -134,17 +134,10 @@ class NodeInputsTest(unittest.TestCase):
             if info:
                 self.camera_info_arrived()
         frame = image_msg(stamp, pad_image() if image is None else image)
-        last_sent = [0.0]
 
         def first_accepted():
             return next((p for p in self.points if p.header.stamp == stamp and accept(p)), None)
-
-        def detected():
-            if time.monotonic() - last_sent[0] > 0.2:
-                self.pub["image"].publish(frame)
-                last_sent[0] = time.monotonic()
-            return first_accepted() is not None
-        wait_for(detected, what)
+        resend_until(lambda: self.pub["image"].publish(frame), lambda: first_accepted() is not None, what)
         return first_accepted()
 
     def camera_info_arrived(self):
@@ -160,17 +153,11 @@ class NodeInputsTest(unittest.TestCase):
         sent count, and ``words`` name its own problem: a warning logged before (by this test or an earlier
         one, e.g. 'no /ardrone/odom_estimate within ...' while no odometry came) cannot pass the check."""
         start = len(self.warnings)
-        publisher.publish(message)
-        last_sent = [time.monotonic()]
-
-        def warned():
-            # Sent again every 0.2 s meanwhile: a warning of the same call site within warn_period of the one
-            # before is throttled (two bad messages in one millisecond give one warning).
-            if time.monotonic() - last_sent[0] > 0.2:
-                publisher.publish(message)
-                last_sent[0] = time.monotonic()
-            return any(all(w in m for w in words) for m in self.warnings[start:])
-        wait_for(warned, "a warning with %s after the bad message" % (words,))
+        # Sent again meanwhile: a warning of the same call site within warn_period of the one before is throttled
+        # (two bad messages in one millisecond give one warning).
+        resend_until(lambda: publisher.publish(message),
+                     lambda: any(all(w in m for w in words) for m in self.warnings[start:]),
+                     "a warning with %s after the bad message" % (words,))
 
     def test_1_good_frame_gives_the_pad_position(self):
         point = self.detect_once()
@@ -295,17 +282,13 @@ class NodeInputsTest(unittest.TestCase):
             odom.pose.pose.orientation.w, odom.pose.pose.orientation.z = np.cos(turn / 2), np.sin(turn / 2)
 
             frame = image_msg(stamp, pad_image())
-            last_sent = [0.0]
 
-            def sent_and_received(odom=odom, frame=frame, stamp=stamp):
-                # Sent again every 0.2 s: a frame that came before the odometry is published relative to the drone
-                # only.
-                if time.monotonic() - last_sent[0] > 0.2:
-                    self.pub["odom"].publish(odom)
-                    self.pub["image"].publish(frame)
-                    last_sent[0] = time.monotonic()
-                return any(p.header.stamp == stamp for p in self.world_points)
-            wait_for(sent_and_received, "the world fix of the frame")
+            def send(odom=odom, frame=frame):
+                self.pub["odom"].publish(odom)
+                self.pub["image"].publish(frame)
+            # Sent again: a frame that came before the odometry is published relative to the drone only.
+            resend_until(send, lambda stamp=stamp: any(p.header.stamp == stamp for p in self.world_points),
+                         "the world fix of the frame")
             point = next(p for p in self.world_points if p.header.stamp == stamp)
             offsets[turn] = (point.point.x - 1.0, point.point.y - 2.0)
         right = 20.0 / FX * CAMERA_HEIGHT

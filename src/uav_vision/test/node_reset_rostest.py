@@ -7,7 +7,6 @@ camera_info, then of an IMU attitude, then of a height, as a fresh node drops it
 again. A parameter changed before a reset is in force after it (the base frame of the relative fixes); a bad or
 missing one refuses the reset, naming it, and the node goes on with its settings and histories."""
 import functools
-import time
 import unittest
 
 import rospy
@@ -83,14 +82,8 @@ class NodeResetTest(unittest.TestCase):
 
     def resend_frame_until(self, stamp, condition, what):
         frame = image_msg(stamp, pad_image())
-        last_sent = [0.0]
-
-        def sent_and_met():
-            if time.monotonic() - last_sent[0] > RESEND_PERIOD:
-                self.pub["image"].publish(frame)
-                last_sent[0] = time.monotonic()
-            return condition()
-        return wait_for(sent_and_met, what)
+        return testing.resend_until(lambda: self.pub["image"].publish(frame), condition, what, WALL_TIMEOUT,
+                                    RESEND_PERIOD)
 
     def detect(self, stamp):
         """The pad position of a frame stamped ``stamp``, published after this call."""

@@ -35,6 +35,20 @@ def wait_for(condition, what, timeout, poll=0.02, process=None):
         time.sleep(poll)
 
 
+def resend_until(send, condition, what, timeout, period_s=0.2):
+    """Calls ``send()`` at once and again every ``period_s`` wall seconds until ``condition()`` is true, and returns
+    that value; fails as ``wait_for`` does. For a message whose result depends on others sent on other
+    connections, which it may overtake."""
+    last_sent = [-float("inf")]
+
+    def sent_and_met():
+        if time.monotonic() - last_sent[0] > period_s:
+            send()
+            last_sent[0] = time.monotonic()
+        return condition()
+    return wait_for(sent_and_met, what, timeout)
+
+
 def node_pid(node):
     """The process id of the ROS node ``node`` (e.g. "/supervisor"), asked of the node itself; None when it is not
     registered or does not answer."""
