@@ -5,8 +5,9 @@ import sys
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from landing_eval.bench_loop import (cpu_bound, deliveries_per_sim_second, node_cpu_per_sim_second,  # noqa: E402
-                                     parallel_gain_bound, published_counts, simulator_shares, stepping_cpu)
+from landing_eval.bench_loop import (cpu_bound, node_cpu_per_sim_second, parallel_gain_bound,  # noqa: E402
+                                     simulator_shares, stepping_cpu)
+from landing_eval.bus_stats import deliveries_per_sim_second, published_counts  # noqa: E402
 
 
 def _sample(sim_s, nodes):
@@ -37,13 +38,13 @@ def test_published_counts_read_both_client_libraries_answers():
     rospy_answer = [1, "", [[["/clock", 7620, [[10, 7956, 635, True], [16, 7944, 634, True]]], ["/unheard", 0, []]],
                             [], []]]
     roscpp_answer = [[["/platform/pose", [[1, 17690, 17690, 290, 0], [3, 17690, 17690, 288, 0]]]], [], []]
-    assert published_counts(rospy_answer) == {"/clock": (2, 1269), "/unheard": (0, 0)}
-    assert published_counts(roscpp_answer) == {"/platform/pose": (2, 578)}
+    assert published_counts(rospy_answer) == {"/clock": (2, 1269, 635), "/unheard": (0, 0, 0)}
+    assert published_counts(roscpp_answer) == {"/platform/pose": (2, 578, 290)}
 
 
 def test_deliveries_per_sim_second_are_the_counts_growth_over_the_span():
-    first = {"/sim": {"/clock": (2, 100), "/imu": (1, 50)}}
-    second = {"/sim": {"/clock": (2, 340), "/imu": (1, 150)}, "/new": {"/x": (1, 20)}}
+    first = {"/sim": {"/clock": (2, 100, 50), "/imu": (1, 50, 50)}}
+    second = {"/sim": {"/clock": (2, 340, 170), "/imu": (1, 150, 150)}, "/new": {"/x": (1, 20, 20)}}
     assert deliveries_per_sim_second(first, second, sim_seconds=2.0) == [
         (120.0, "/clock", "/sim", 2), (50.0, "/imu", "/sim", 1), (10.0, "/x", "/new", 1)]
     assert deliveries_per_sim_second(first, second, sim_seconds=0.0) == []

@@ -4,8 +4,10 @@
 
 For each profile, one after the other on this machine: the simulator alone at full speed with a camera
 subscriber (`bench_sim`), then the whole landing graph on the scenario (`run_scenario`), which samples the
-CPU time of each of its nodes from /proc; then the scenario three times on one warm graph as `benchmark --warm`
-flies a sweep, each after the first on the reset graph. Prints each real-time factor, their ratio, the fixed per-scenario
+CPU time of each of its nodes from /proc and notes the graph's topology in flight (topology.json); then the scenario
+three times on one warm graph as `benchmark --warm` flies a sweep, each after the first on the reset graph; then the
+graph floor (`bench_floor` of that topology: the simulator beside null nodes that only exchange the graph's messages,
+the most this graph's transport allows). Prints each real-time factor, their ratios, the fixed per-scenario
 overhead (start-up and shut-down, from result.json's wall_phases_s) of a fresh graph and of a reset one, and
 the CPU seconds per sim second of each node (on a loaded machine this moves less than the wall-clock
 figures); with --profile, py-spy's hottest functions of each Python node. Compare profiles only within one
@@ -22,7 +24,7 @@ import sys
 import threading
 import time
 
-from . import processes
+from . import bus_stats, processes
 
 PROFILES = ("ideal", "realistic", "harsh")
 
@@ -151,81 +153,83 @@ IDLE = re.compile(r"^(wait|_wait_for_tstate_lock|sleep|select|poll|accept|recv_i
                   r"spin|epoll)\b|threading.py|selectors.py|socket.py.*\breadinto")
 
 
-def published_counts(bus_stats):
-    """{topic: (connections, messages sent over them)} of one node's publications, from its XML-RPC getBusStats:
-    rospy answers [code, text, stats] with [connection id, bytes, messages, connected] per connection, roscpp
-    [stats] with [connection id, bytes, data bytes, messages, ...]."""
-    stats = bus_stats[2] if isinstance(bus_stats[0], int) else bus_stats
-    counts = {}
-    for entry in stats[0]:
-        topic, connections = entry[0], entry[-1]
-        index = 3 if connections and len(connections[0]) >= 5 else 2
-        counts[topic] = (len(connections), sum(c[index] for c in connections))
-    return counts
-
-
-def deliveries_per_sim_second(first, second, sim_seconds):
-    """[(messages delivered per sim second, topic, publishing node, connections)], most first, from two census
-    snapshots {node: {topic: (connections, messages)}} taken ``sim_seconds`` apart (a connection made between them
-    counts from zero)."""
-    rows = []
-    for node, topics in second.items():
-        for topic, (connections, sent) in topics.items():
-            before = first.get(node, {}).get(topic, (0, 0))[1]
-            if sent > before and sim_seconds > 0:
-                rows.append(((sent - before) / sim_seconds, topic, node, connections))
-    return sorted(rows, reverse=True)
-
-
 class BusCensus:
     """How many messages the run's graph delivers per sim second, topic by topic: every node's own counts (the
-    getBusStats every rospy and roscpp node answers over XML-RPC), read twice in flight, ``span_s`` wall seconds
-    apart, from ``after_s`` after the run's start (in flight for a scenario such as summit_circle_1ms); the sim
-    seconds between them from the /clock messages the simulator sent to each subscriber."""
+    getBusStats every rospy and roscpp node answers over XML-RPC), read when the simulator's /clock has run
+    ``after_sim_s`` and again ``span_sim_s`` later (in flight for a scenario such as summit_circle_1ms); the sim
+    seconds from the /clock messages the simulator sent to each subscriber. With ``topology_path``, the graph's
+    topology is written there too (landing_eval.graph_floor: what bench_floor builds its null graph of)."""
 
-    def __init__(self, root_pid, after_s=8.0, span_s=5.0):
-        self.root_pid, self.after_s, self.span_s = root_pid, after_s, span_s
+    def __init__(self, root_pid, after_sim_s=6.0, span_sim_s=6.0, timeout_s=600.0, topology_path=None):
+        self.root_pid, self.after_sim_s, self.span_sim_s = root_pid, after_sim_s, span_sim_s
+        self.timeout_s, self.topology_path = timeout_s, topology_path
         self.rows, self.error = [], None
+        self.running = True
         self.thread = threading.Thread(target=self._run, daemon=True)
 
     def start(self):
         self.thread.start()
         return self
 
-    def _snapshot(self, uris):
-        import xmlrpc.client
-        counts = {}
-        for node, uri in uris.items():
-            try:
-                counts[node] = published_counts(xmlrpc.client.ServerProxy(uri).getBusStats("/bench_loop"))
-            except (OSError, xmlrpc.client.Error, IndexError, TypeError):  # gone, or an answer of another form
-                pass
-        return counts
+    def _snapshot_at(self, uris, clock_hz, sim_s, deadline):
+        """A snapshot once the simulator's clock has reached ``sim_s``, or None when the run ends first."""
+        while self.running and time.monotonic() < deadline:
+            snapshot = bus_stats.snapshot(uris)
+            if bus_stats.SIMULATOR not in snapshot:
+                return None
+            if bus_stats.sim_seconds(snapshot, clock_hz) >= sim_s:
+                return snapshot
+            time.sleep(0.1)
+        return None
 
     def _run(self):
         try:
             import rosgraph
-            time.sleep(self.after_s)
-            nodes = processes.nodes_below([self.root_pid])
-            command = processes.command_line(nodes["master"]) if "master" in nodes else []
-            port = command[command.index("-p") + 1] if "-p" in command[:-1] else None
-            if port is None:
-                self.error = "no master found below the run"
+            deadline = time.monotonic() + self.timeout_s
+            master = simulator = None
+            while simulator is None and self.running and time.monotonic() < deadline:
+                nodes = processes.nodes_below([self.root_pid])
+                command = processes.command_line(nodes["master"]) if "master" in nodes else []
+                port = command[command.index("-p") + 1] if "-p" in command[:-1] else None
+                if port is not None:
+                    master = rosgraph.Master("/bench_loop", master_uri="http://127.0.0.1:%s/" % port)
+                    try:
+                        clock_hz = master.getParam("/mujoco_sim/rates/clock_hz")
+                        simulator = master.lookupNode(bus_stats.SIMULATOR)
+                    except Exception:  # not up yet
+                        pass
+                time.sleep(0.2)
+            if simulator is None:
+                self.error = "no simulator found at a master below the run"
                 return
-            master = rosgraph.Master("/bench_loop", master_uri="http://127.0.0.1:%s/" % port)
+            from . import graph_floor
+            # The lock-step acknowledgements are heard before the census (the listener's own connections would
+            # count in it).
+            acks = graph_floor.AckListener(master.master_uri) if self.topology_path else None
+            try:
+                first = self._snapshot_at({bus_stats.SIMULATOR: simulator}, clock_hz, self.after_sim_s, deadline)
+            finally:
+                heard = acks.stop() if acks else []
             publishers = master.getSystemState()[0]
             uris = {node: master.lookupNode(node) for node in {n for _, names in publishers for n in names}}
-            clock_hz = master.getParam("/mujoco_sim/rates/clock_hz")
-            first = self._snapshot(uris)
-            time.sleep(self.span_s)
-            second = self._snapshot(uris)
-            connections, ticks = second.get("/mujoco_sim", {}).get("/clock", (0, 0))
-            ticks -= first.get("/mujoco_sim", {}).get("/clock", (0, 0))[1]
-            self.rows = deliveries_per_sim_second(first, second, ticks / connections / clock_hz if connections else 0.0)
+            first = first and bus_stats.snapshot(uris)
+            second = first and self._snapshot_at(
+                uris, clock_hz, bus_stats.sim_seconds(first, clock_hz) + self.span_sim_s, deadline)
+            if not second:
+                self.error = "the flight ended before %.0f s of sim time" % (self.after_sim_s + self.span_sim_s)
+                return
+            sim_seconds = bus_stats.sim_seconds(second, clock_hz) - bus_stats.sim_seconds(first, clock_hz)
+            self.rows = bus_stats.deliveries_per_sim_second(first, second, sim_seconds)
+            if self.topology_path and not heard:
+                self.error = "no lock-step acknowledgement heard in flight: no topology for the graph floor"
+            elif self.topology_path:
+                graph_floor.save(graph_floor.capture(master, uris, first, second, sim_seconds, heard),
+                                 self.topology_path)
         except Exception as err:  # the census is a diagnostic: the benchmark goes on without it
             self.error = "%s: %s" % (type(err).__name__, err)
 
     def stop(self, timeout=30.0):
+        self.running = False
         self.thread.join(timeout)
         return {"rows": self.rows, "error": self.error}
 
@@ -259,7 +263,23 @@ def measure_warm(scenario, out, profile, timeout, runs=3):
             "first_start_up": first.get("wall_phases_s", {}).get("start_up"), "between_flights": between}
 
 
-def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=True, label=None):
+def measure_floor(topology, profile, sim_seconds, timeout):
+    """bench_floor of the ``topology`` a closed-loop run noted: {"rtf", "cpu" {process: CPU s per sim s}, "misses"
+    (publications off their rate), "error"}."""
+    if not os.path.isfile(topology):
+        return {"error": "no topology of the graph was noted in flight"}
+    run = subprocess.run(["rosrun", "landing_eval", "bench_floor", topology, "--json", "--realism", profile,
+                          "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
+                         capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
+    lines = [line for line in run.stdout.splitlines() if line.startswith("{")]
+    if not lines:
+        return {"error": (run.stderr.strip().splitlines() or ["bench_floor exited with %d" % run.returncode])[-1]}
+    figures = json.loads(lines[-1])
+    return {"rtf": figures["real_time_factor"], "cpu": figures["cpu"], "misses": figures["rate_misses"],
+            "error": None}
+
+
+def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=True, label=None, floor=True):
     sim = subprocess.run(["rosrun", "landing_eval", "bench_sim", "--json", "--realism", profile,
                           "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
                          capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
@@ -273,7 +293,7 @@ def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=Tru
                                  profile, "--wall-timeout", str(timeout)], stdout=log, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL)
         profiler = Profiler(loop.pid, run_dir).start() if py_spy else None
-        census = BusCensus(loop.pid).start()
+        census = BusCensus(loop.pid, timeout_s=timeout, topology_path=os.path.join(run_dir, "topology.json")).start()
         try:
             loop.wait(timeout=timeout + 300)
         except subprocess.TimeoutExpired:
@@ -292,18 +312,35 @@ def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=Tru
             "loop_rtf": result.get("real_time_factor"), "outcome": result.get("outcome"),
             "phases": result.get("wall_phases_s", {}), "cpu": node_cpu_per_sim_second(result), "hot": hot,
             "steps": result.get("wall_steps_s", {}), "simulator": simulator_shares(stats),
-            "error": result.get("error"), "warm": measure_warm(scenario, run_dir, profile, timeout) if warm else None}
+            "error": result.get("error"), "warm": measure_warm(scenario, run_dir, profile, timeout) if warm else None,
+            "floor": measure_floor(os.path.join(run_dir, "topology.json"), profile, sim_seconds, timeout)
+            if floor else None}
 
+
+
+def _ratio(a, b):
+    return a / b if a and b else None
 
 
 def report(rows):
-    print("| profile | simulator alone RTF | closed loop RTF | loop / alone | start-up [s] | shut-down [s] | outcome |")
-    print("|---|---|---|---|---|---|---|")
+    print("| profile | simulator alone RTF | graph floor RTF | closed loop RTF | floor / alone | loop / alone | "
+          "loop / floor | start-up [s] | shut-down [s] | outcome |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        ratio = r["loop_rtf"] / r["sim_alone_rtf"] if r["loop_rtf"] and r["sim_alone_rtf"] else None
-        print("| %s | %s | %s | %s | %s | %s | %s |" % (
-            r["label"], _f(r["sim_alone_rtf"]), _f(r["loop_rtf"]), _f(ratio), _f(r["phases"].get("start_up")),
-            _f(r["phases"].get("shut_down")), r["outcome"]))
+        floor = (r.get("floor") or {}).get("rtf")
+        print("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            r["label"], _f(r["sim_alone_rtf"]), _f(floor), _f(r["loop_rtf"]), _f(_ratio(floor, r["sim_alone_rtf"])),
+            _f(_ratio(r["loop_rtf"], r["sim_alone_rtf"])), _f(_ratio(r["loop_rtf"], floor)),
+            _f(r["phases"].get("start_up")), _f(r["phases"].get("shut_down")), r["outcome"]))
+    print("(graph floor: the simulator beside null nodes that exchange the graph's messages and do no work, "
+          "bench_floor: the most this graph's transport allows)")
+    for r in rows:
+        floor = r.get("floor") or {}
+        if floor.get("error"):
+            print("(no graph floor, %s: %s)" % (r["label"], floor["error"]))
+        for node, topic, asked, got in floor.get("misses") or []:
+            print("warning: graph floor, %s: %s published %s at %.1f per sim s, not %.1f" % (
+                r["label"], node, topic, got, asked))
     for r in rows:
         w = r.get("warm")
         if w:
@@ -340,6 +377,11 @@ def report(rows):
                 "%s %.2f" % (k, v) for k, v in r["steps"].items() if k not in ("flight", "clock_runs"))))
     medians = {}
     for profile in dict.fromkeys(r["profile"] for r in rows):
+        floors = sorted(_ratio((r.get("floor") or {}).get("rtf"), r["sim_alone_rtf"]) or 0.0 for r in rows
+                        if r["profile"] == profile)
+        if len(floors) > 1 and all(floors):
+            print("%s, %d interleaved runs: floor / alone median %.2f (%.2f-%.2f)" % (
+                profile, len(floors), statistics.median(floors), floors[0], floors[-1]))
         ratios = sorted(r["loop_rtf"] / r["sim_alone_rtf"] for r in rows
                         if r["profile"] == profile and r["loop_rtf"] and r["sim_alone_rtf"])
         loops = sorted(r["loop_rtf"] for r in rows if r["profile"] == profile and r["loop_rtf"])
@@ -360,6 +402,17 @@ def report(rows):
     for name in names:
         print("| %s | %s |" % (name, " | ".join(_f(r["cpu"].get(name), 3) for r in rows)))
     print("| all | %s |" % " | ".join(_f(sum(r["cpu"].values()) if r["cpu"] else None, 3) for r in rows))
+    floors = [r for r in rows if (r.get("floor") or {}).get("cpu")]
+    if floors:
+        print("\nthe same in the graph floor (null nodes: the messages' transport alone; the drone on its pad, as in the "
+              "simulator-alone run):")
+        names = sorted({n for r in floors for n in r["floor"]["cpu"]}, key=lambda n: -max(
+            r["floor"]["cpu"].get(n, 0) for r in floors))
+        print("| node | " + " | ".join(r["label"] for r in floors) + " |")
+        print("|---|" + "---|" * len(floors))
+        for name in names:
+            print("| %s | %s |" % (name, " | ".join(_f(r["floor"]["cpu"].get(name), 3) for r in floors)))
+        print("| all | %s |" % " | ".join(_f(sum(r["floor"]["cpu"].values()), 3) for r in floors))
     for r in rows:
         census = r.get("deliveries") or {}
         if census.get("rows"):
@@ -408,6 +461,8 @@ def main(argv=None):
     parser.add_argument("--sim-seconds", type=float, default=60.0, help="sim time of the simulator-alone run [s]")
     parser.add_argument("--timeout", type=float, default=900.0, help="wall-clock limit of each run [s]")
     parser.add_argument("--no-warm", action="store_true", help="skip the runs on a warm graph")
+    parser.add_argument("--no-floor", action="store_true", help="skip the graph floor (bench_floor of the topology "
+                        "noted in flight)")
     parser.add_argument("--repeat", type=int, default=1, help="measure each profile this many times, the profiles "
                         "taking turns (alone, loop, alone, loop, ...), and print the medians: the machine's speed "
                         "drifts from one minute to the next")
@@ -424,7 +479,7 @@ def main(argv=None):
         return 2
     os.makedirs(args.out, exist_ok=True)
     rows = [measure(args.scenario, args.out, p, args.sim_seconds, args.timeout, args.profile, not args.no_warm,
-                    label=p if args.repeat == 1 else "%s #%d" % (p, k + 1))
+                    label=p if args.repeat == 1 else "%s #%d" % (p, k + 1), floor=not args.no_floor)
             for k in range(args.repeat) for p in profiles]
     with open(os.path.join(args.out, "bench_loop.json"), "w") as stream:
         json.dump(rows, stream, indent=2)
