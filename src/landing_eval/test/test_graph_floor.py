@@ -234,3 +234,6 @@ def test_bench_floor_runs_the_real_simulator_beside_null_nodes(tmp_path):
     run = subprocess.run(["rosrun", "landing_eval", "bench_floor", str(bad)], capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 1 and "is not a graph topology" in run.stderr
+    run = subprocess.run(["rosrun", "landing_eval", "bench_floor", topology, "--jobs", "0"], capture_output=True,
+                         text=True, timeout=120)
+    assert run.returncode == 2 and "--jobs must be 1 or more" in run.stderr

@@ -1,7 +1,8 @@
 """The closed loop's floor: how fast the real simulator runs inside a graph of the same shape as the landing
 graph whose nodes do nothing but exchange the same messages.
 
-    rosrun landing_eval bench_floor TOPOLOGY.json [--realism PROFILE] [--sim-seconds S] [--json]
+    rosrun landing_eval bench_floor TOPOLOGY.json [--realism PROFILE] [--sim-seconds S] [--merge NODE,...|all]
+                                                  [--jobs N] [--json]
 
 ``bench_loop`` notes the landing graph's topology in flight (topology.json in its run directory: every node's
 subscriptions, its publications with their rates per sim second, its lock-step acknowledgements and its client
@@ -13,7 +14,10 @@ messages of the same types at the same rates and acknowledges the same inputs, s
 gate waits for it as for the real node. No node computes anything, so what the floor costs beyond the simulator
 alone is the transport of the graph's messages: the real-time factor the landing graph could reach if its nodes'
 own work cost nothing. Publications below one message per sim second (latched states, one-off commands such as
-a take-off) are left out: they cost nothing and would change the world.
+a take-off) are left out: they cost nothing and would change the world. ``--merge`` runs some nodes (or all) as one
+roscpp process, as nodelets of one manager would: what a change of the graph's shape would gain, before it is
+built. ``--jobs N`` runs N floors side by side after one alone: the most ``benchmark --jobs N`` could gain with this
+graph, whatever its nodes do.
 """
 import argparse
 import dataclasses
@@ -312,6 +316,35 @@ def fidelity(nodes, published, tolerance=0.1):
     return misses
 
 
+def side_by_side(argv, jobs, timeout):
+    """The floor alone, then ``jobs`` floors at once (each a bench_floor process of its own: rospy allows one node a
+    process); prints each real-time factor and the throughput of the ``jobs`` against the one alone."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    at = argv.index("--jobs") if "--jobs" in argv else None
+    argv = argv[:at] + argv[at + 2:] if at is not None else [a for a in argv if not a.startswith("--jobs=")]
+    command = [sys.executable, "-m", "landing_eval.graph_floor"] + [a for a in argv if a != "--json"] + ["--json"]
+
+    def figures(process):
+        out, err = process.communicate(timeout=timeout + 120)
+        lines = [line for line in out.splitlines() if line.startswith("{")]
+        if process.returncode != 0 or not lines:
+            raise RuntimeError((err.strip().splitlines() or ["exited with %d" % process.returncode])[-1])
+        return json.loads(lines[-1])["real_time_factor"]
+
+    def start():
+        return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                stdin=subprocess.DEVNULL)
+    try:
+        alone = figures(start())
+        together = [figures(p) for p in [start() for _ in range(jobs)]]
+    except (RuntimeError, subprocess.TimeoutExpired) as err:
+        print("bench_floor: %s" % err, file=sys.stderr)
+        return 1
+    print("one floor alone: %.2fx real time; %d side by side: %s; throughput %.2fx the one alone" % (
+        alone, jobs, ", ".join("%.2fx" % rtf for rtf in together), sum(together) / alone))
+    return 0
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("topology", help="topology.json of a bench_loop run (in its run directory)")
@@ -322,8 +355,16 @@ def main(argv=None):
     parser.add_argument("--merge", action="append", default=[], metavar="NODE,NODE,...|all",
                         help="run these nodes as one roscpp process (what nodelets of one manager would gain); "
                         "may be given more than once")
+    parser.add_argument("--jobs", type=int, default=1, help="with 2 or more: the floor alone, then this many floors "
+                        "side by side, and their throughput against the one alone (what benchmark --jobs N can gain "
+                        "at most with this graph)")
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON line (for bench_loop)")
     args = parser.parse_args(argv)
+    if args.jobs < 1:
+        print("bench_floor: --jobs must be 1 or more, got %d" % args.jobs, file=sys.stderr)
+        return 2
+    if args.jobs > 1:
+        return side_by_side(argv, args.jobs, args.timeout)
     try:
         nodes = load(args.topology)
         for index, group in enumerate(args.merge):
@@ -347,3 +388,7 @@ def main(argv=None):
         print("warning: %s published %s at %.1f per sim s, not %.1f: the floor is not the graph's" % (
             node, topic, got, asked))
     return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
