@@ -72,7 +72,8 @@ def test_publish_rates_follow_each_topics_oldest_connection():
 
 def test_acknowledgements_are_read_from_rostopic_echo_csv():
     csv = ("%time,field.node,field.input,field.stamp,field.period\n"
-           "1,/tracker,/clock,33000000,33333333\n1,/estimator,/ardrone/imu,20000000,0\nbroken line\n")
+           "1,/tracker,/clock,33000000,33333333\n1,/estimator,/ardrone/imu,20000000,0\nbroken line\n"
+           "1,/x,/clock,0,not a number\n")
     assert graph_floor.parse_acks(csv) == [("/tracker", "/clock", 0.033333333), ("/estimator", "/ardrone/imu", 0.0)]
     assert graph_floor.parse_acks("") == [] and graph_floor.parse_acks("%time,field.other\n1,2\n") == []
 

@@ -5,6 +5,7 @@ the simulator's own /clock messages, so no clock subscription of ours is needed 
 import xmlrpc.client
 
 SIMULATOR = "/mujoco_sim"
+NODE_TIMEOUT_S = 5.0  # how long a node may take to answer an XML-RPC call [wall s]
 
 
 def published_counts(bus_stats):
@@ -53,12 +54,18 @@ def client_of(bus_stats):
     return "rospy" if isinstance(bus_stats[0], int) else "roscpp"
 
 
+def node_api(uri, timeout=NODE_TIMEOUT_S):
+    """A node's XML-RPC API that gives up after ``timeout`` wall seconds (a node that hangs must not hang us)."""
+    from .isolated_ros import TimeoutTransport
+    return xmlrpc.client.ServerProxy(uri, transport=TimeoutTransport(timeout))
+
+
 def snapshot(uris, caller="/bus_stats"):
     """{node: published_counts} of every node of ``uris`` ({node: XML-RPC URI}) that answers."""
     counts = {}
     for node, uri in uris.items():
         try:
-            counts[node] = published_counts(xmlrpc.client.ServerProxy(uri).getBusStats(caller))
+            counts[node] = published_counts(node_api(uri).getBusStats(caller))
         except (OSError, xmlrpc.client.Error, IndexError, TypeError):  # gone, or an answer of another form
             pass
     return counts

@@ -106,7 +106,7 @@ def parse_acks(csv_text):
     acks = []
     for line in lines[1:]:
         fields = line.split(",")
-        if len(fields) == len(header):
+        if len(fields) == len(header) and fields[period].isdigit():
             acks.append((fields[node], fields[input_topic], int(fields[period]) / 1e9))  # a Duration in nanoseconds
     return acks
 
@@ -158,7 +158,7 @@ def capture(master, uris, first, second, sim_seconds, acks):
             continue
         try:
             uri = uris.get(node) or master.lookupNode(node)
-            clients[node] = client_of(xmlrpc.client.ServerProxy(uri).getBusStats("/bench_loop"))
+            clients[node] = client_of(bus_stats.node_api(uri).getBusStats("/bench_loop"))
         except Exception:  # gone: not part of the floor
             pass
     return topology(state, dict(master.getTopicTypes()), clients, publish_rates(first, second, sim_seconds), acks)
@@ -268,7 +268,7 @@ def _fly(sim, master, nodes, sim_seconds, deadline, log_dir, started):
     networked = set()  # roscpp lists a subscriber in its own process as a connection, but counts none of its messages
     for node in nodes:
         try:
-            connections = xmlrpc.client.ServerProxy(uris[node]).getBusInfo("/bench_floor")[-1]
+            connections = bus_stats.node_api(uris[node]).getBusInfo("/bench_floor")[-1]
         except (OSError, xmlrpc.client.Error, IndexError, TypeError):  # gone: its rates are missing
             continue
         # Entries: (id, destination, direction, transport, topic, ...); a publisher's are outbound ('o').

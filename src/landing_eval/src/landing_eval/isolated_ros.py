@@ -59,7 +59,7 @@ def unconnected_subscriptions(system_state, outbound):
     return missing
 
 
-class _TimeoutTransport(xmlrpc.client.Transport):
+class TimeoutTransport(xmlrpc.client.Transport):
     """XML-RPC over HTTP with a socket timeout: a node that hangs must not hang its caller."""
 
     def __init__(self, timeout):
@@ -73,7 +73,7 @@ class _TimeoutTransport(xmlrpc.client.Transport):
 
 
 def _node_api(master, node, timeout):
-    return xmlrpc.client.ServerProxy(master.lookupNode(node), transport=_TimeoutTransport(timeout))
+    return xmlrpc.client.ServerProxy(master.lookupNode(node), transport=TimeoutTransport(timeout))
 
 
 def graph_unconnected(master, timeout=2.0):
