@@ -56,3 +56,20 @@ def test_the_simulators_cpu_figures_are_read_from_its_statistics():
     assert simulator_shares(stats) == {"physics": 0.2}
     assert stepping_cpu(stats) == {"physics": 0.05, "publish": 0.1, "stepping": 0.16, "process": 0.3}
     assert stepping_cpu({"physics_share": 0.2}) == {}
+
+
+def test_the_report_tables_rows_have_as_many_columns_as_their_header(capsys):
+    from landing_eval.bench_loop import report
+    row = {"profile": "ideal", "label": "ideal", "sim_alone_rtf": 12.0, "loop_rtf": 4.8, "outcome": "landed_on_pad",
+           "phases": {"start_up": 2.3, "shut_down": 0.6}, "steps": {}, "simulator": {}, "sim_alone_cpu": {},
+           "sim_loop_cpu": {}, "cpu": {"sim": 0.15, "tracker": 0.03}, "hot": {}, "deliveries": {"rows": []},
+           "floor": {"rtf": 6.0, "cpu": {"sim": 0.14}, "misses": [["/tracker", "/cmd", 30.0, 20.0]], "error": None},
+           "warm": {"loop_rtf": 4.5, "reset": True, "phases": {"start_up": 0.4, "shut_down": 0.1},
+                    "outcome": "landed_on_pad", "between_flights": 0.5, "first_start_up": 2.2, "steps": {}}}
+    report([row])
+    lines = capsys.readouterr().out.splitlines()
+    table = [line for line in lines[:lines.index("|---|---|---|---|---|---|---|---|---|---|") + 3]]
+    assert len({line.count("|") for line in table if line.startswith("| ideal") or line.startswith("| profile")}) == 1
+    assert "| ideal | 12.00 | 6.00 | 4.80 | 0.50 | 0.40 | 0.80 | 2.30 | 0.60 | landed_on_pad |" in lines
+    assert any(line.startswith("| ideal, graph reset |") and line.count("|") == 11 for line in lines)
+    assert "warning: graph floor, ideal: /tracker published /cmd at 20.0 per sim s, not 30.0" in lines

@@ -268,9 +268,12 @@ def measure_floor(topology, profile, sim_seconds, timeout):
     (publications off their rate), "error"}."""
     if not os.path.isfile(topology):
         return {"error": "no topology of the graph was noted in flight"}
-    run = subprocess.run(["rosrun", "landing_eval", "bench_floor", topology, "--json", "--realism", profile,
-                          "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
-                         capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
+    try:
+        run = subprocess.run(["rosrun", "landing_eval", "bench_floor", topology, "--json", "--realism", profile,
+                              "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
+                             capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        return {"error": "bench_floor did not end within %.0f s" % (timeout + 60)}
     lines = [line for line in run.stdout.splitlines() if line.startswith("{")]
     if not lines:
         return {"error": (run.stderr.strip().splitlines() or ["bench_floor exited with %d" % run.returncode])[-1]}
@@ -344,9 +347,10 @@ def report(rows):
     for r in rows:
         w = r.get("warm")
         if w:
-            ratio = w["loop_rtf"] / r["sim_alone_rtf"] if w["loop_rtf"] and r["sim_alone_rtf"] else None
-            print("| %s, graph reset%s | | %s | %s | %s | %s | %s |" % (
-                r["label"], "" if w["reset"] else " (NOT: fresh)", _f(w["loop_rtf"]), _f(ratio),
+            floor = (r.get("floor") or {}).get("rtf")
+            print("| %s, graph reset%s | | | %s | | %s | %s | %s | %s | %s |" % (
+                r["label"], "" if w["reset"] else " (NOT: fresh)", _f(w["loop_rtf"]),
+                _f(_ratio(w["loop_rtf"], r["sim_alone_rtf"])), _f(_ratio(w["loop_rtf"], floor)),
                 _f(w["phases"].get("start_up")), _f(w["phases"].get("shut_down")), w["outcome"]))
     for r in rows:
         w = r.get("warm")
