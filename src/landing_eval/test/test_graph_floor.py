@@ -110,17 +110,18 @@ from std_msgs.msg import String
 rospy.init_node("mujoco_sim", disable_signals=True)
 clock, imu = direct_publisher("/clock", Clock), direct_publisher("/ardrone/imu", Imu)
 heard = {"py": 0, "cpp": 0, "acks": {}}
-rospy.Subscriber("/out_py", String, lambda m: heard.__setitem__("py", heard["py"] + 1))
-rospy.Subscriber("/out_cpp", PointStamped, lambda m: heard.__setitem__("cpp", heard["cpp"] + 1))
+out_py = rospy.Subscriber("/out_py", String, lambda m: heard.__setitem__("py", heard["py"] + 1))
+out_cpp = rospy.Subscriber("/out_cpp", PointStamped, lambda m: heard.__setitem__("cpp", heard["cpp"] + 1))
 def on_ack(m):
     key = "%s %s %.3f" % (m.node, m.input, m.period.to_sec())
     heard["acks"].setdefault(key, []).append(m.stamp.to_sec())
-rospy.Subscriber("/lockstep_ack", LockstepAck, on_ack)
-deadline = time.monotonic() + 60
-while imu.get_num_connections() < 2 or clock.get_num_connections() < 2:
-    assert time.monotonic() < deadline, "the null nodes did not subscribe"
+acks = rospy.Subscriber("/lockstep_ack", LockstepAck, on_ack)
+deadline = time.monotonic() + 90
+# Both null nodes listen and are heard, and the test says go (its own listener of the acknowledgements is up).
+while imu.get_num_connections() < 2 or clock.get_num_connections() < 2 or out_py.get_num_connections() < 1 or \
+        out_cpp.get_num_connections() < 1 or acks.get_num_connections() < 2 or not rospy.has_param("/go"):
+    assert time.monotonic() < deadline, "the null nodes did not connect"
     time.sleep(0.05)
-time.sleep(1.0)  # their publishers' connections to us
 counted_from, sim_seconds, sent = 2.0, float(sys.argv[1]), []
 for tick in range(1, int(sim_seconds * 60) + 1):
     t = tick / 60.0
@@ -163,13 +164,16 @@ def test_null_nodes_publish_at_their_rates_acknowledge_and_a_topology_noted_from
     stand_in = subprocess.Popen([sys.executable, "-c", STAND_IN, "30"], env=env, stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
-        deadline = time.monotonic() + 90
-        while "/null_cpp" not in {n for _, names in proxy.getSystemState()[0] for n in names} or \
-                graph_unconnected(proxy):
+        deadline = time.monotonic() + 120
+        every = {"/mujoco_sim", "/null_py", "/null_cpp"}
+        while not every <= {n for _, names in proxy.getSystemState()[0] for n in names} or graph_unconnected(proxy):
             assert time.monotonic() < deadline and stand_in.poll() is None, "the graph did not connect"
             time.sleep(0.1)
-        os.environ["ROS_MASTER_URI"] = proxy.master_uri
         acks = graph_floor.AckListener(proxy.master_uri)
+        while len(dict(proxy.getSystemState()[1]).get("/lockstep_ack", [])) < 2 or graph_unconnected(proxy):
+            assert time.monotonic() < deadline and stand_in.poll() is None, "rostopic echo did not connect"
+            time.sleep(0.1)
+        proxy.setParam("/go", True)  # the stand-in's clock runs from here
         uris = {name: proxy.lookupNode(name) for name in ["/mujoco_sim", "/null_py", "/null_cpp"]}
 
         def snapshot_after(sim_s):
