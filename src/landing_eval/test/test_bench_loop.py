@@ -73,3 +73,13 @@ def test_the_report_tables_rows_have_as_many_columns_as_their_header(capsys):
     assert "| ideal | 12.00 | 6.00 | 4.80 | 0.50 | 0.40 | 0.80 | 2.30 | 0.60 | landed_on_pad |" in lines
     assert any(line.startswith("| ideal, graph reset |") and line.count("|") == 11 for line in lines)
     assert "warning: graph floor, ideal: /tracker published /cmd at 20.0 per sim s, not 30.0" in lines
+
+
+def test_py_spys_frames_of_waiting_threads_count_as_idle(tmp_path):
+    from landing_eval.bench_loop import hot_functions
+    (tmp_path / "tracker.txt").write_text(
+        "Thread._bootstrap (threading.py:995);recv_buff (rospy/impl/tcpros_base.py:106) 60\n"
+        "main (node.py:9);socket.accept (socket.py:294) 10\n"
+        "main (node.py:9);Tracker.tick (platform_tracking/node.py:427) 30\n")
+    hot = hot_functions(str(tmp_path))["tracker"]
+    assert hot[0] == (0.7, "(idle)") and hot[1] == (0.3, "Tracker.tick (platform_tracking/node.py:427)")

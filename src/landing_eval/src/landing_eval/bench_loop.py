@@ -149,8 +149,10 @@ def hot_functions(profile_dir, top=8):
     return hot
 
 
-IDLE = re.compile(r"^(wait|_wait_for_tstate_lock|sleep|select|poll|accept|recv_into|readinto|recv|_recv_loop|"
-                  r"spin|epoll)\b|threading.py|selectors.py|socket.py.*\breadinto")
+# Frames of a thread that waits (py-spy samples a thread blocked in a system call as active): rospy's receiving
+# threads wait in recv_buff, its servers in socket.accept.
+IDLE = re.compile(r"^(wait|_wait_for_tstate_lock|sleep|select|poll|accept|recv_into|readinto|recv|recv_buff|_recv_loop|"
+                  r"spin|epoll|socket\.accept|SocketIO\.readinto)\b|threading.py|selectors.py|socket.py.*\breadinto")
 
 
 class BusCensus:
