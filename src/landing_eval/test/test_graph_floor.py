@@ -11,7 +11,7 @@ import time
 import pytest
 
 from landing_eval import bus_stats, graph_floor
-from landing_eval.graph_floor import NullNode
+from landing_eval.graph_floor import NodeShape
 
 STATE = ([["/clock", ["/mujoco_sim"]], ["/imu", ["/mujoco_sim"]], ["/odom", ["/estimator"]],
           ["/rosout", ["/estimator", "/tracker"]], ["/lockstep_ack", ["/estimator"]], ["/state", ["/tracker"]],
@@ -140,10 +140,10 @@ print(json.dumps(dict(heard, imu=sent, span=sim_seconds - counted_from)))
 
 
 def _null_nodes():
-    py = NullNode("/null_py", "rospy", [{"topic": "/ardrone/imu", "type": "sensor_msgs/Imu"}],
+    py = NodeShape("/null_py", "rospy", [{"topic": "/ardrone/imu", "type": "sensor_msgs/Imu"}],
                   [{"topic": "/out_py", "type": "std_msgs/String", "rate_hz": 25.0}],
                   [{"input": "/ardrone/imu", "period": 0.0, "rate_hz": 50.0}])
-    cpp = NullNode("/null_cpp", "roscpp", [{"topic": "/out_py", "type": "std_msgs/String"},
+    cpp = NodeShape("/null_cpp", "roscpp", [{"topic": "/out_py", "type": "std_msgs/String"},
                                            {"topic": "/ardrone/imu", "type": "sensor_msgs/Imu"}],
                    [{"topic": "/out_cpp", "type": "geometry_msgs/PointStamped", "rate_hz": 20.0}],
                    [{"input": "/clock", "period": 0.05}])
@@ -158,7 +158,7 @@ def test_null_nodes_publish_at_their_rates_acknowledge_and_a_topology_noted_from
     serialized = graph_floor.default_messages(p["type"] for node in nodes.values() for p in node.publishes)
     proxy.setParam("/use_sim_time", True)
     for node in nodes.values():
-        proxy.setParam(node.name + "/null_spec", node.spec(serialized))
+        proxy.setParam(node.name + "/null_spec", node.null_spec(serialized))
     children = [subprocess.Popen(graph_floor.null_node_command(node), env=env, start_new_session=True,
                                  stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT) for node in nodes.values()]
     stand_in = subprocess.Popen([sys.executable, "-c", STAND_IN, "30"], env=env, stdout=subprocess.PIPE,

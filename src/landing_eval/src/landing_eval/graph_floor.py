@@ -44,8 +44,9 @@ NOT_NULLED = (SIMULATOR, "/rosout", "master")  # the simulator is the real one; 
 
 
 @dataclasses.dataclass
-class NullNode:
-    """One node of the floor: what the real node of that name subscribes to, publishes and acknowledges."""
+class NodeShape:
+    """What one node of the graph subscribes to, publishes and acknowledges: the floor's null node of that name does
+    the same, and nothing else."""
     name: str
     client: str  # "rospy" or "roscpp": the client library of the real node, and so of its null node
     subscribes: List[Dict[str, str]]  # [{"topic", "type"}]
@@ -53,7 +54,7 @@ class NullNode:
     acks: List[Dict]  # [{"input", "period"}]: period 0, each message of topic ``input`` (which comes at "rate_hz"
     # per sim second); else a timer step [sim s]
 
-    def spec(self, serialized):
+    def null_spec(self, serialized):
         """The node's ~null_spec parameter: its topics with, for each publication, the type's MD5 sum and
         definition and a default message serialised (``serialized``: {type: (md5sum, definition, bytes)})."""
         publishes = []
@@ -64,11 +65,11 @@ class NullNode:
 
 
 def topology(system_state, topic_types, clients, publish_rates, acks, not_nulled=NOT_NULLED):
-    """{node: NullNode} of the graph behind a master: ``system_state`` its getSystemState() (publishers,
+    """{node: NodeShape} of the graph behind a master: ``system_state`` its getSystemState() (publishers,
     subscribers, services), ``topic_types`` {topic: type}, ``clients`` {node: 'rospy' | 'roscpp'} (a node missing
     from it is left out), ``publish_rates`` {(node, topic): messages per sim second}, ``acks`` [(node, input,
     period [sim s])] as heard on /lockstep_ack. The nodes in ``not_nulled`` are left out."""
-    nodes = {name: NullNode(name, client, [], [], []) for name, client in clients.items() if name not in not_nulled}
+    nodes = {name: NodeShape(name, client, [], [], []) for name, client in clients.items() if name not in not_nulled}
     for topic, names in system_state[1]:
         for name in names:
             if name in nodes and topic not in IMPLICIT_SUBSCRIPTIONS and topic in topic_types:
@@ -117,11 +118,11 @@ def save(nodes, path):
 
 
 def load(path):
-    """{node: NullNode} from a topology.json written by save()."""
+    """{node: NodeShape} from a topology.json written by save()."""
     try:
         with open(path) as stream:
             raw = json.load(stream)
-        return {name: NullNode(**fields) for name, fields in raw.items()}
+        return {name: NodeShape(**fields) for name, fields in raw.items()}
     except (OSError, ValueError, TypeError, AttributeError) as err:
         raise ValueError("%s is not a graph topology (bench_loop writes one per run as topology.json): %s"
                          % (path, err))
@@ -201,7 +202,7 @@ def run(nodes, realism="realistic", sim_seconds=30.0, timeout=300.0, vehicle="su
         sim.wait_for_master(timeout=min(60.0, timeout))
         master = rosgraph.Master("/bench_floor", master_uri=sim.master_uri)
         for node in nodes.values():
-            master.setParam(node.name + "/null_spec", node.spec(serialized))
+            master.setParam(node.name + "/null_spec", node.null_spec(serialized))
         started = []
         try:
             for node in nodes.values():
@@ -287,7 +288,7 @@ def merge(nodes, names, merged_name):
     unknown = [name for name in names if name not in nodes]
     if unknown:
         raise ValueError("no node %s in the topology (it has %s)" % (", ".join(unknown), ", ".join(sorted(nodes))))
-    merged = NullNode(merged_name, "roscpp", [], [], [])
+    merged = NodeShape(merged_name, "roscpp", [], [], [])
     timers = []
     for name in names:
         node = nodes[name]

@@ -1,11 +1,12 @@
 """A null node of the graph floor (landing_eval.graph_floor), rospy: the transport of one rospy node of the landing
 graph without its work.
 
-It reads ``~null_spec`` ({"subscribes": [{topic, type}], "publishes": [{topic, type, rate_hz, md5sum, definition,
-data: the serialised default message}], "acks": [{input, period, rate_hz}]}), subscribes to every topic with its real message class (a Python node
-deserialises what it receives), and publishes the default message of each publication at its rate, driven as the
-real node is: by its lock-step timer if it has one (period > 0), else by the first input it acknowledges, else by a
-timer at its fastest publication's rate. It acknowledges what the real node acknowledges.
+It reads ``~null_spec`` (graph_floor.NodeShape.null_spec: {"subscribes": [{topic, type}], "publishes": [{topic,
+type, rate_hz, md5sum, definition, data: the serialised default message}], "acks": [{input, period, rate_hz}]}),
+subscribes to every topic with its real message class (a Python node deserialises what it receives), and publishes
+the default message of each publication at its rate, driven as the real node is: by its lock-step timer if it has
+one (period > 0), else by the first input it acknowledges, else by a timer at its fastest publication's rate. It
+acknowledges what the real node acknowledges.
 """
 import rospy
 
