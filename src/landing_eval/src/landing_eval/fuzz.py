@@ -28,6 +28,7 @@ import math
 import os
 import random
 import re
+import subprocess
 import sys
 import time
 
@@ -64,6 +65,15 @@ def wait_until_ready(out_dir, process, deadline):
         if time.monotonic() > deadline:
             raise TimeoutError("the input fuzzer did not connect to the graph in time; see %s" % process.log_path)
         time.sleep(0.05)
+
+
+def wait_until_ended(process, timeout):
+    """Until the interrupted fuzzer has written what it sent and exited, for at most ``timeout`` wall seconds (then
+    the summary reads its last periodic save, and says no more than that file)."""
+    try:
+        process.process.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pass
 
 
 # ----- garbage, ROS-free but for the message classes ------------------------------------------------------

@@ -34,6 +34,7 @@ SETTLE_AFTER_TOUCHDOWN_S = 1.0  # sim seconds the drone must rest before the out
 EMERGENCY_REPORT_WAIT_S = 4.0   # sim seconds to wait for emergency/position after an emergency touchdown
 START_UP_WALL_S = 240.0         # master, graph, recorder, connections and the first clock tick, at most [s]
 SHUT_DOWN_WALL_S = 60.0         # stopping the recorder and the launch (20 s each before SIGKILL), reindexing [s]
+FUZZER_STOP_S = 10.0            # how long the interrupted input fuzzer may take to write what it sent and exit [wall s]
 # How often start-up asks the master (and, for the connections, every node) whether the graph is ready [s]: each
 # question costs the processes coming up CPU on a machine the start-up already fills. 4 interleaved runs each:
 # start-up 2.93-3.27 s polling every 0.02 s, 2.42-2.73 s every 0.1 s (0.05 s and 0.2 s: 2.66-2.97 s).
@@ -837,6 +838,9 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             result.update(monitor.scored(error, aborted, sim_start, sim_time, phases["flight"]))
             step("scored")
             if fuzzer is not None:
+                # What it sent is final once it has ended: it writes it every 5 wall seconds and once more as it ends.
+                # Read before that last write, a fresh machine's run lacked 12.7 of its 42 fuzzed sim seconds.
+                fuzz.wait_until_ended(fuzzer, FUZZER_STOP_S)
                 result["fuzz"] = fuzz.summary(out_dir, monitor.warnings, s["fuzz"])
             if warm is None:
                 leaving.append(monitor.start_leaving_graph())
