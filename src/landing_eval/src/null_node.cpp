@@ -1,8 +1,8 @@
 // A null node of the graph floor (landing_eval.graph_floor), roscpp: the transport of one roscpp node of the
 // landing graph without its work. Reads ~null_spec (see landing_eval/null_node.py, its rospy twin), subscribes to
 // every topic without deserialising (topic_tools::ShapeShifter), publishes the default message of each publication
-// at its rate, driven by its lock-step timer if it has one, else by the first input it acknowledges, else by a
-// timer at its fastest publication's rate, and acknowledges what the real node acknowledges.
+// at its rate on the events of its driver (a timer, or an input: graph_floor.NodeShape.driver), and acknowledges
+// what the real node acknowledges.
 #include <landing_eval/null_node_core.h>
 #include <landing_msgs/lockstep_acker.h>
 #include <ros/ros.h>
@@ -50,31 +50,20 @@ struct Publication {
 class NullNode {
  public:
   NullNode(ros::NodeHandle& nh, XmlRpc::XmlRpcValue& spec) {
-    double timer_period = 0.0, driver_hz = 0.0, fastest = 0.0;
+    if (!spec.hasMember("driver")) throw std::runtime_error("it lacks its 'driver'");
+    XmlRpc::XmlRpcValue& driver = spec["driver"];
+    driver_ = member(driver, "input");
+    const double timer_hz = number(driver, "timer_hz", 0.0), driver_hz = number(driver, "hz", 0.0);
     XmlRpc::XmlRpcValue& acks = list(spec, "acks");
     for (int i = 0; i < acks.size(); ++i) {
       const std::string input = member(acks[i], "input");
       const double period = number(acks[i], "period", 0.0);
-      if (period > 0.0) {
-        if (timer_period <= 0.0) timer_period = period;
-      } else {
+      if (period <= 0.0)
         input_acks_.emplace(input, std::make_unique<landing_msgs::LockstepAcker>(nh, input));
-        if (driver_.empty()) {
-          driver_ = input;
-          driver_hz = number(acks[i], "rate_hz", 0.0);
-        }
-      }
+      else if (!timer_ack_)
+        timer_ack_ = std::make_unique<landing_msgs::LockstepAcker>(nh, ros::Duration(period));
     }
     XmlRpc::XmlRpcValue& publishes = list(spec, "publishes");
-    for (int i = 0; i < publishes.size(); ++i) fastest = std::max(fastest, number(publishes[i], "rate_hz", 0.0));
-    double timer_hz = 0.0;
-    if (timer_period > 0.0) {
-      timer_ack_ = std::make_unique<landing_msgs::LockstepAcker>(nh, ros::Duration(timer_period));
-      timer_hz = driver_hz = 1.0 / timer_period;
-      driver_.clear();
-    } else if (driver_.empty()) {
-      timer_hz = driver_hz = fastest;
-    }
     for (int i = 0; i < publishes.size(); ++i) addPublication(nh, publishes[i], driver_hz);
     XmlRpc::XmlRpcValue& subscribes = list(spec, "subscribes");
     for (int i = 0; i < subscribes.size(); ++i) {
@@ -110,7 +99,7 @@ class NullNode {
       if (auto stamp = landing_eval::headerStamp(bytes.data(), bytes.size()))
         acker->second->ack(ros::Time(stamp->first, stamp->second));
     }
-    if (topic == driver_) publishDue();
+    if (topic == driver_) publishDue();  // ("" for a timer: no topic)
   }
 
   void publishDue() {

@@ -62,6 +62,18 @@ def test_merged_nodes_receive_a_topic_once_and_keep_every_publication_and_the_fa
         graph_floor.merge(_topology(), ["/nobody"], "/x")
 
 
+def test_a_null_node_is_driven_as_its_node_by_its_timer_else_its_first_input_else_its_fastest_publication():
+    nodes = _topology()
+    assert nodes["/tracker"].driver() == {"timer_hz": pytest.approx(30.0), "input": "", "hz": pytest.approx(30.0)}
+    assert nodes["/estimator"].driver() == {"timer_hz": 0.0, "input": "/imu", "hz": 50.0}
+    assert nodes["/recorder"].driver() == {"timer_hz": 0.0, "input": "", "hz": 0.0}  # publishes nothing: no timer
+    nodes["/recorder"].publishes = [{"topic": "/a", "type": "std_msgs/String", "rate_hz": 5.0},
+                                    {"topic": "/b", "type": "std_msgs/String", "rate_hz": 20.0}]
+    assert nodes["/recorder"].driver() == {"timer_hz": 20.0, "input": "", "hz": 20.0}
+    merged = graph_floor.merge(_topology(), ["/estimator", "/tracker"], "/both")["/both"]
+    assert merged.driver()["timer_hz"] == pytest.approx(30.0)  # the timer, not the input
+
+
 def test_publish_rates_follow_each_topics_oldest_connection():
     first = {"/sim": {"/clock": (2, 100, 60), "/imu": (1, 50, 50)}}
     second = {"/sim": {"/clock": (3, 340, 180), "/imu": (1, 150, 150)}, "/new": {"/x": (1, 20, 20)}}

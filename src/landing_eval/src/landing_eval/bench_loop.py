@@ -268,18 +268,14 @@ def measure_warm(scenario, out, profile, timeout, runs=3):
 def measure_floor(topology, profile, sim_seconds, timeout):
     """bench_floor of the ``topology`` a closed-loop run noted: {"rtf", "cpu" {process: CPU s per sim s}, "misses"
     (publications off their rate), "error"}."""
+    from . import graph_floor
     if not os.path.isfile(topology):
         return {"error": "no topology of the graph was noted in flight"}
     try:
-        run = subprocess.run(["rosrun", "landing_eval", "bench_floor", topology, "--json", "--realism", profile,
-                              "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
-                             capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
-    except subprocess.TimeoutExpired:
-        return {"error": "bench_floor did not end within %.0f s" % (timeout + 60)}
-    lines = [line for line in run.stdout.splitlines() if line.startswith("{")]
-    if not lines:
-        return {"error": (run.stderr.strip().splitlines() or ["bench_floor exited with %d" % run.returncode])[-1]}
-    figures = json.loads(lines[-1])
+        figures = graph_floor.floor_figures(graph_floor.start_floor(
+            graph_floor.command(topology, profile, sim_seconds, timeout)), timeout + 60)
+    except RuntimeError as err:
+        return {"error": str(err)}
     return {"rtf": figures["real_time_factor"], "cpu": figures["cpu"], "misses": figures["rate_misses"],
             "error": None}
 

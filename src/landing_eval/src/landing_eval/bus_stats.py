@@ -56,8 +56,8 @@ def client_of(bus_stats):
 
 def node_api(uri, timeout=NODE_TIMEOUT_S):
     """A node's XML-RPC API that gives up after ``timeout`` wall seconds (a node that hangs must not hang us)."""
-    from .isolated_ros import TimeoutTransport
-    return xmlrpc.client.ServerProxy(uri, transport=TimeoutTransport(timeout))
+    from .isolated_ros import node_api as bounded_api
+    return bounded_api(uri, timeout)
 
 
 def snapshot(uris, caller="/bus_stats"):

@@ -54,14 +54,28 @@ class NodeShape:
     acks: List[Dict]  # [{"input", "period"}]: period 0, each message of topic ``input`` (which comes at "rate_hz"
     # per sim second); else a timer step [sim s]
 
+    def driver(self):
+        """What makes the null node publish, as the real node does: {"timer_hz": its lock-step timer's rate (0: none),
+        "input": else the first input it acknowledges ("": none), "hz": how often either comes [per sim s]}; a node with
+        neither ticks at its fastest publication's rate."""
+        timer = next((a for a in self.acks if a["period"] > 0), None)
+        if timer is not None:
+            return {"timer_hz": 1.0 / timer["period"], "input": "", "hz": 1.0 / timer["period"]}
+        first_input = next((a for a in self.acks if a["period"] <= 0), None)
+        if first_input is not None:
+            return {"timer_hz": 0.0, "input": first_input["input"], "hz": first_input.get("rate_hz", 0.0)}
+        fastest = max((p["rate_hz"] for p in self.publishes), default=0.0)
+        return {"timer_hz": fastest, "input": "", "hz": fastest}
+
     def null_spec(self, serialized):
         """The node's ~null_spec parameter: its topics with, for each publication, the type's MD5 sum and
-        definition and a default message serialised (``serialized``: {type: (md5sum, definition, bytes)})."""
+        definition and a default message serialised (``serialized``: {type: (md5sum, definition, bytes)}), and its
+        driver()."""
         publishes = []
         for pub in self.publishes:
             md5sum, definition, data = serialized[pub["type"]]
             publishes.append(dict(pub, md5sum=md5sum, definition=definition, data=xmlrpc.client.Binary(data)))
-        return {"subscribes": self.subscribes, "publishes": publishes, "acks": self.acks}
+        return {"subscribes": self.subscribes, "publishes": publishes, "acks": self.acks, "driver": self.driver()}
 
 
 def topology(system_state, topic_types, clients, publish_rates, acks, not_nulled=NOT_NULLED):
@@ -317,28 +331,41 @@ def fidelity(nodes, published, tolerance=0.1):
     return misses
 
 
-def side_by_side(argv, jobs, timeout):
+def command(topology, realism, sim_seconds, timeout, merges=()):
+    """bench_floor's command line for one floor, its figures as one JSON line (floor_figures reads them)."""
+    return ([sys.executable, "-m", "landing_eval.graph_floor", topology, "--json", "--realism", realism,
+             "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)] +
+            [argument for group in merges for argument in ("--merge", group)])
+
+
+def floor_figures(process, timeout):
+    """The figures a bench_floor --json ``process`` (subprocess.Popen, text pipes) prints; RuntimeError naming why
+    there are none (it failed, or did not end within ``timeout`` wall seconds)."""
+    try:
+        out, err = process.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.communicate()
+        raise RuntimeError("bench_floor did not end within %.0f s" % timeout)
+    lines = [line for line in out.splitlines() if line.startswith("{")]
+    if process.returncode != 0 or not lines:
+        raise RuntimeError((err.strip().splitlines() or ["bench_floor exited with %d" % process.returncode])[-1])
+    return json.loads(lines[-1])
+
+
+def start_floor(floor_command):
+    return subprocess.Popen(floor_command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            stdin=subprocess.DEVNULL)
+
+
+def side_by_side(floor_command, jobs, timeout):
     """The floor alone, then ``jobs`` floors at once (each a bench_floor process of its own: rospy allows one node a
     process); prints each real-time factor and the throughput of the ``jobs`` against the one alone."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    at = argv.index("--jobs") if "--jobs" in argv else None
-    argv = argv[:at] + argv[at + 2:] if at is not None else [a for a in argv if not a.startswith("--jobs=")]
-    command = [sys.executable, "-m", "landing_eval.graph_floor"] + [a for a in argv if a != "--json"] + ["--json"]
-
-    def figures(process):
-        out, err = process.communicate(timeout=timeout + 120)
-        lines = [line for line in out.splitlines() if line.startswith("{")]
-        if process.returncode != 0 or not lines:
-            raise RuntimeError((err.strip().splitlines() or ["exited with %d" % process.returncode])[-1])
-        return json.loads(lines[-1])["real_time_factor"]
-
-    def start():
-        return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                stdin=subprocess.DEVNULL)
     try:
-        alone = figures(start())
-        together = [figures(p) for p in [start() for _ in range(jobs)]]
-    except (RuntimeError, subprocess.TimeoutExpired) as err:
+        alone = floor_figures(start_floor(floor_command), timeout)["real_time_factor"]
+        together = [floor_figures(p, timeout)["real_time_factor"]
+                    for p in [start_floor(floor_command) for _ in range(jobs)]]
+    except RuntimeError as err:
         print("bench_floor: %s" % err, file=sys.stderr)
         return 1
     print("one floor alone: %.2fx real time; %d side by side: %s; throughput %.2fx the one alone" % (
@@ -365,7 +392,8 @@ def main(argv=None):
         print("bench_floor: --jobs must be 1 or more, got %d" % args.jobs, file=sys.stderr)
         return 2
     if args.jobs > 1:
-        return side_by_side(argv, args.jobs, args.timeout)
+        return side_by_side(command(args.topology, args.realism, args.sim_seconds, args.timeout, args.merge),
+                            args.jobs, args.timeout + 120)
     try:
         nodes = load(args.topology)
         for index, group in enumerate(args.merge):

@@ -59,7 +59,7 @@ def unconnected_subscriptions(system_state, outbound):
     return missing
 
 
-class TimeoutTransport(xmlrpc.client.Transport):
+class _TimeoutTransport(xmlrpc.client.Transport):
     """XML-RPC over HTTP with a socket timeout: a node that hangs must not hang its caller."""
 
     def __init__(self, timeout):
@@ -72,8 +72,13 @@ class TimeoutTransport(xmlrpc.client.Transport):
         return connection
 
 
+def node_api(uri, timeout):
+    """The XML-RPC API of the node at ``uri``, giving up after ``timeout`` wall seconds."""
+    return xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport(timeout))
+
+
 def _node_api(master, node, timeout):
-    return xmlrpc.client.ServerProxy(master.lookupNode(node), transport=TimeoutTransport(timeout))
+    return node_api(master.lookupNode(node), timeout)
 
 
 def graph_unconnected(master, timeout=2.0):

@@ -2,11 +2,10 @@
 graph without its work.
 
 It reads ``~null_spec`` (graph_floor.NodeShape.null_spec: {"subscribes": [{topic, type}], "publishes": [{topic,
-type, rate_hz, md5sum, definition, data: the serialised default message}], "acks": [{input, period, rate_hz}]}),
-subscribes to every topic with its real message class (a Python node deserialises what it receives), and publishes
-the default message of each publication at its rate, driven as the real node is: by its lock-step timer if it has
-one (period > 0), else by the first input it acknowledges, else by a timer at its fastest publication's rate. It
-acknowledges what the real node acknowledges.
+type, rate_hz, md5sum, definition, data: the serialised default message}], "acks": [{input, period, rate_hz}],
+"driver": {timer_hz, input, hz}}), subscribes to every topic with its real message class (a Python node deserialises
+what it receives), and publishes the default message of each publication at its rate on the events of its driver (a
+timer, or an input: NodeShape.driver). It acknowledges what the real node acknowledges.
 """
 import rospy
 
@@ -37,18 +36,11 @@ class Publication:
 class NullNode:
     def __init__(self, spec):
         import roslib.message
-        acks = spec.get("acks", [])
+        acks, driver = spec.get("acks", []), spec["driver"]
+        self.rate_hz, self.driver = driver["timer_hz"], driver["input"]
         timer = next((a for a in acks if a["period"] > 0), None)
-        driving_input = next((a for a in acks if a["period"] <= 0), None)
-        fastest = max((p["rate_hz"] for p in spec.get("publishes", [])), default=0.0)
-        if timer is not None:
-            self.rate_hz, driver_hz, self.driver = 1.0 / timer["period"], 1.0 / timer["period"], None
-        elif driving_input is not None:
-            self.rate_hz, driver_hz, self.driver = None, driving_input.get("rate_hz", 0.0), driving_input["input"]
-        else:
-            self.rate_hz, driver_hz, self.driver = (fastest or None), fastest, None
         self.timer_ack = LockstepAcker(period=timer["period"]) if timer is not None else None
-        self.publications = [Publication(p, driver_hz) for p in spec.get("publishes", [])]
+        self.publications = [Publication(p, driver["hz"]) for p in spec.get("publishes", [])]
         input_acks = {a["input"]: LockstepAcker(a["input"]) for a in acks if a["period"] <= 0}
         self.subscribers = []
         for sub in spec.get("subscribes", []):
@@ -63,7 +55,7 @@ class NullNode:
         topic, acker = args
         if acker is not None:
             acker.ack(message.header.stamp)
-        if topic == self.driver:
+        if topic == self.driver:  # ("" for a timer: no topic)
             self._publish_due()
 
     def _publish_due(self):
