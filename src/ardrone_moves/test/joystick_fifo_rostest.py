@@ -14,7 +14,7 @@ from sensor_msgs.msg import Joy
 from std_msgs.msg import Empty, String
 
 from ardrone_moves.joystick_device import EVENT_AXIS, EVENT_BUTTON, encode_event
-from landing_msgs import testing
+from landing_runtime import testing
 
 TIMEOUT = 60.0      # generous: the machine may be loaded
 FULL = 32767

@@ -14,7 +14,7 @@ import threading
 import time
 
 import pytest
-from landing_msgs import testing
+from landing_runtime import testing
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKAGE = os.path.dirname(HERE)

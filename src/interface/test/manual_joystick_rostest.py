@@ -18,7 +18,7 @@ from landing_msgs.msg import Navdata
 from std_msgs.msg import String
 
 from ardrone_moves.joystick_device import EVENT_AXIS, EVENT_BUTTON, encode_event
-from landing_msgs import testing
+from landing_runtime import testing
 
 WALL_TIMEOUT = 180.0  # per wait [wall s]: the simulator may run slower than asked on a loaded machine
 FULL = 32767

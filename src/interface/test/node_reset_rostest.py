@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest of ~reset (landing_msgs.rospy_node.ResettableNode) on cmd_vel_mux and emergency: a reset node starts
+"""rostest of ~reset (landing_runtime.rospy_node.ResettableNode) on cmd_vel_mux and emergency: a reset node starts
 afresh from its parameters as they are then (its initial latched outputs again, a new rate), takes the latched
 inputs at once as a fresh node does, and a bad parameter is refused while the node goes on."""
 import threading
@@ -8,7 +8,7 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import Twist
-from landing_msgs import testing
+from landing_runtime import testing
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 

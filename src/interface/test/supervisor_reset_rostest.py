@@ -10,7 +10,7 @@ import unittest
 
 import rospy
 import rostest
-from landing_msgs import testing
+from landing_runtime import testing
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger
 
@@ -23,7 +23,7 @@ NEWCOMER = """
 import json, sys
 import rospy
 from std_msgs.msg import Bool, String
-from landing_msgs import testing
+from landing_runtime import testing
 rospy.init_node("newcomer", anonymous=True)
 got = {name: [] for name, _topic, _type in json.loads(sys.argv[1])}
 subscribers = [rospy.Subscriber(topic, {"Bool": Bool, "String": String}[kind],

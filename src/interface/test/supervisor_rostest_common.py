@@ -15,7 +15,7 @@ import rospy
 from geometry_msgs.msg import PoseStamped, Twist
 from landing_msgs.msg import Navdata, PositionXYCommand, Touchdown
 from std_msgs.msg import Bool, Empty, String
-from landing_msgs import testing
+from landing_runtime import testing
 
 WALL_TIMEOUT = 120.0   # per wait [wall s]; the simulator may run slower than its real-time factor
 REACTION_LIMIT = 1.0   # a condition change must be acted on within this [sim s]

@@ -9,7 +9,7 @@ import subprocess
 import sys
 
 import pytest
-from landing_msgs import testing
+from landing_runtime import testing
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKAGE = os.path.dirname(HERE)

@@ -4,7 +4,7 @@
 // at its rate on the events of its driver (a timer, or an input: graph_floor.NodeShape.driver), and acknowledges
 // what the real node acknowledges.
 #include <landing_eval/null_node_core.h>
-#include <landing_msgs/lockstep_acker.h>
+#include <landing_runtime/lockstep_acker.h>
 #include <ros/ros.h>
 #include <topic_tools/shape_shifter.h>
 
@@ -59,9 +59,9 @@ class NullNode {
       const std::string input = member(acks[i], "input");
       const double period = number(acks[i], "period", 0.0);
       if (period <= 0.0)
-        input_acks_.emplace(input, std::make_unique<landing_msgs::LockstepAcker>(nh, input));
+        input_acks_.emplace(input, std::make_unique<landing_runtime::LockstepAcker>(nh, input));
       else if (!timer_ack_)
-        timer_ack_ = std::make_unique<landing_msgs::LockstepAcker>(nh, ros::Duration(period));
+        timer_ack_ = std::make_unique<landing_runtime::LockstepAcker>(nh, ros::Duration(period));
     }
     XmlRpc::XmlRpcValue& publishes = list(spec, "publishes");
     for (int i = 0; i < publishes.size(); ++i) addPublication(nh, publishes[i], driver_hz);
@@ -113,8 +113,8 @@ class NullNode {
     if (timer_ack_) timer_ack_->ack(event.current_real);
   }
 
-  std::map<std::string, std::unique_ptr<landing_msgs::LockstepAcker>> input_acks_;
-  std::unique_ptr<landing_msgs::LockstepAcker> timer_ack_;
+  std::map<std::string, std::unique_ptr<landing_runtime::LockstepAcker>> input_acks_;
+  std::unique_ptr<landing_runtime::LockstepAcker> timer_ack_;
   std::vector<std::unique_ptr<Publication>> publications_;
   std::vector<ros::Subscriber> subscribers_;
   std::string driver_;

@@ -115,7 +115,7 @@ import json, sys, time
 import rospy
 from geometry_msgs.msg import PointStamped
 from landing_msgs.msg import LockstepAck
-from landing_msgs.rospy_node import direct_publisher
+from landing_runtime.rospy_node import direct_publisher
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 from std_msgs.msg import String

@@ -10,7 +10,7 @@ import unittest
 
 import rospy
 import rostest
-from landing_msgs import testing
+from landing_runtime import testing
 from landing_msgs.msg import Navdata
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock

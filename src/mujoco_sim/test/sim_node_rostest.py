@@ -12,7 +12,7 @@ from landing_msgs.msg import Altimeter, Navdata, Touchdown
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
 from std_msgs.msg import Empty
-from landing_msgs import testing
+from landing_runtime import testing
 
 WALL_TIMEOUT = 120.0
 RATES = {  # topic: (type, expected rate in sim time [Hz])

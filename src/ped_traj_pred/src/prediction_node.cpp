@@ -219,7 +219,7 @@ void PredictionNode::onDetection(const geometry_msgs::PointStamped::ConstPtr& ms
     return;
   }
   if (auto problem = inputProblem(msg->header, {{"point.x", position.x()}, {"point.y", position.y()},
-                                                {"point.z", position.z()}}, landing_msgs::kMaxPositionM))
+                                                {"point.z", position.z()}}, landing_runtime::kMaxPositionM))
     return rejections_->reject(detection_sub_.getTopic(), *problem);
   const ros::Time stamp = stampOf(msg->header);
   logOutcome(track_.filter.addVision(stamp.toSec(), position, visionVariance(stamp)), detection_sub_.getTopic(), stamp);
@@ -229,7 +229,7 @@ void PredictionNode::onRelativeDetection(const geometry_msgs::PointStamped::Cons
 {
   // Relative to the drone: its height above the pad at most, and a camera's view across.
   if (auto problem = inputProblem(msg->header, {{"point.x", msg->point.x}, {"point.y", msg->point.y},
-                                                {"point.z", msg->point.z}}, landing_msgs::kMaxAltitudeM))
+                                                {"point.z", msg->point.z}}, landing_runtime::kMaxAltitudeM))
     return rejections_->reject(relative_sub_.getTopic(), *problem);
   const double range = std::sqrt(msg->point.x * msg->point.x + msg->point.y * msg->point.y + msg->point.z * msg->point.z);
   track_.last_range = std::make_pair(stampOf(msg->header), range);
@@ -248,19 +248,19 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
 {
   const geometry_msgs::Point& p = msg->pose.pose.position;
   const geometry_msgs::Quaternion& q = msg->pose.pose.orientation;
-  if (auto problem = landing_msgs::frameProblem(msg->header.frame_id, settings_.world_frame))
+  if (auto problem = landing_runtime::frameProblem(msg->header.frame_id, settings_.world_frame))
     return rejections_->reject(gps_sub_.getTopic(), *problem);
-  if (auto problem = landing_msgs::stampProblem(msg->header.stamp, ros::Time::now()))
+  if (auto problem = landing_runtime::stampProblem(msg->header.stamp, ros::Time::now()))
     return rejections_->reject(gps_sub_.getTopic(), *problem);
   // A NaN is dropped field by field below (a report without that part); a finite value must be plausible.
   const geometry_msgs::Vector3& v = msg->twist.twist.linear;
-  for (const auto& [name, value, limit] : {std::tuple<const char*, double, double>{"position.x", p.x, landing_msgs::kMaxPositionM},
-                                           {"position.y", p.y, landing_msgs::kMaxPositionM},
-                                           {"twist.linear.x", v.x, landing_msgs::kMaxSpeedMps},
-                                           {"twist.linear.y", v.y, landing_msgs::kMaxSpeedMps},
-                                           {"twist.angular.z", msg->twist.twist.angular.z, landing_msgs::kMaxRateRadps}})
+  for (const auto& [name, value, limit] : {std::tuple<const char*, double, double>{"position.x", p.x, landing_runtime::kMaxPositionM},
+                                           {"position.y", p.y, landing_runtime::kMaxPositionM},
+                                           {"twist.linear.x", v.x, landing_runtime::kMaxSpeedMps},
+                                           {"twist.linear.y", v.y, landing_runtime::kMaxSpeedMps},
+                                           {"twist.angular.z", msg->twist.twist.angular.z, landing_runtime::kMaxRateRadps}})
     if (std::isfinite(value))
-      if (auto problem = landing_msgs::numberProblem(name, value, limit))
+      if (auto problem = landing_runtime::numberProblem(name, value, limit))
         return rejections_->reject(gps_sub_.getTopic(), *problem);
   VehicleReport report;
   // Without a fix (a receiver in a dropout) the report still carries the vehicle's odometry; its position
@@ -318,13 +318,13 @@ void PredictionNode::onGps(const nav_msgs::Odometry::ConstPtr& msg)
   logOutcome(track_.filter.addVehicleReport(stamp.toSec(), report), gps_sub_.getTopic(), stamp);
 }
 
-std::optional<landing_msgs::InputProblem> PredictionNode::inputProblem(
+std::optional<landing_runtime::InputProblem> PredictionNode::inputProblem(
     const std_msgs::Header& header, std::initializer_list<std::pair<const char*, double>> values, double limit) const
 {
-  if (auto problem = landing_msgs::stampProblem(header.stamp, ros::Time::now()))
+  if (auto problem = landing_runtime::stampProblem(header.stamp, ros::Time::now()))
     return problem;
   for (const auto& [name, value] : values)
-    if (auto problem = landing_msgs::numberProblem(name, value, limit))
+    if (auto problem = landing_runtime::numberProblem(name, value, limit))
       return problem;
   return std::nullopt;
 }

@@ -19,7 +19,7 @@ from landing_msgs.msg import LockstepAck
 from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock, Log
 from std_srvs.srv import Trigger
-from landing_msgs import testing
+from landing_runtime import testing
 
 NODE = "/prediction_kalman_node"
 PAD = (3.0, -2.0, 0.497)       # where every new track starts [m]

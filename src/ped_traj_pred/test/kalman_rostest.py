@@ -20,8 +20,8 @@ import rostest
 from geometry_msgs.msg import PointStamped
 from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock, Log
-from landing_msgs import testing
-from landing_msgs.rospy_node import without_nagle
+from landing_runtime import testing
+from landing_runtime.rospy_node import without_nagle
 
 NODE = "/prediction_kalman_node"
 RADIUS, SPEED, PAD_HEIGHT = 10.0, 3.0, 0.497  # [m], [m/s], [m]

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest of ~reset (landing_msgs.rospy_node.ResettableNode) on drone_estimator and platform_tracking: the test
+"""rostest of ~reset (landing_runtime.rospy_node.ResettableNode) on drone_estimator and platform_tracking: the test
 drives the clock (sim time, from 100 s on) and plays the drone's sensors, the camera and the operator.
 
 A reset node starts as a fresh one: the estimator from the next GPS fix (not gating it against the previous
@@ -16,7 +16,7 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import PointStamped, Twist
-from landing_msgs import testing
+from landing_runtime import testing
 from landing_msgs.msg import Altimeter, Navdata
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock

@@ -15,7 +15,7 @@ import collections
 import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped, PoseStamped
-from landing_msgs.lockstep import LockstepAcker
+from landing_runtime.lockstep import LockstepAcker
 from nav_msgs.msg import Odometry, Path
 
 

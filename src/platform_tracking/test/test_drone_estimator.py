@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from landing_msgs.geometry import yaw_from_quaternion
+from landing_runtime.geometry import yaw_from_quaternion
 from platform_tracking.estimator import DroneEstimator, heading_to_world, world_to_heading
 from platform_tracking.params import EstimatorParams
 

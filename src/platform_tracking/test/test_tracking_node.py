@@ -11,7 +11,7 @@ from geometry_msgs.msg import PoseStamped  # noqa: E402
 from nav_msgs.msg import Odometry, Path  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
-from landing_msgs.input_check import RosRejectionLog  # noqa: E402
+from landing_runtime.input_check import RosRejectionLog  # noqa: E402
 from platform_tracking import node  # noqa: E402
 from platform_tracking.params import ParamError, TrackingParams  # noqa: E402
 

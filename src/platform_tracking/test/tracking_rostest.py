@@ -11,7 +11,7 @@ import rostest
 from landing_msgs.msg import Touchdown
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Float64, String
-from landing_msgs import testing
+from landing_runtime import testing
 
 WALL_TIMEOUT = 300.0
 

@@ -9,8 +9,8 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import Twist
-from landing_msgs import testing
-from landing_msgs.rospy_node import without_nagle
+from landing_runtime import testing
+from landing_runtime.rospy_node import without_nagle
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Empty
 from std_srvs.srv import Trigger

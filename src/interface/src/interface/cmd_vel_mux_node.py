@@ -9,9 +9,9 @@ import sys
 
 import rospy
 from geometry_msgs.msg import Twist
-from landing_msgs.input_check import MAX_RATE_RADPS, MAX_SPEED_MPS, RosRejectionLog, numbers_problem
-from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import NodeHandles, direct_publisher, run_node
+from landing_runtime.input_check import MAX_RATE_RADPS, MAX_SPEED_MPS, RosRejectionLog, numbers_problem
+from landing_runtime.lockstep import LockstepAcker
+from landing_runtime.rospy_node import NodeHandles, direct_publisher, run_node
 from std_msgs.msg import String
 
 from .cmd_vel_mux import ALLOWED, CommandSelector

@@ -194,7 +194,7 @@ class ConsoleNode:
         every subscriber of operator/command the master lists is connected: sent before, the command would be
         lost (a script's sim-time waits may end before a slow supervisor has subscribed). After timeout_s it
         warns and lets this and every later command go out without waiting."""
-        from landing_msgs.rospy_node import unconnected_subscribers
+        from landing_runtime.rospy_node import unconnected_subscribers
         if self.listeners_given_up:
             return
         deadline = time.monotonic() + timeout_s

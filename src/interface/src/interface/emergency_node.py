@@ -14,11 +14,11 @@ import threading
 
 import rospy
 from geometry_msgs.msg import PointStamped, Twist
-from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, RosRejectionLog, choice_problem, first_problem,
+from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, RosRejectionLog, choice_problem, first_problem,
                                       frame_problem, numbers_problem, stamp_problem)
-from landing_msgs.lockstep import LockstepAcker
+from landing_runtime.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
-from landing_msgs.rospy_node import NodeHandles, direct_publisher, run_node
+from landing_runtime.rospy_node import NodeHandles, direct_publisher, run_node
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 from std_msgs.msg import Empty, String

@@ -21,11 +21,11 @@ import time
 import rospy
 from ardrone_moves.node import DroneCommands
 from geometry_msgs.msg import PointStamped
-from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
+from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
 from platform_tracking.state_machine import State as TrackerState
 from landing_msgs.msg import Altimeter, PositionXYCommand
-from landing_msgs.rospy_node import init_node
+from landing_runtime.rospy_node import init_node
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Range
 from std_msgs.msg import Float64, String

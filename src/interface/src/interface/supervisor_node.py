@@ -27,16 +27,16 @@ import sys
 import threading
 import time
 
-from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem, first_problem,
+from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem, first_problem,
                                       frame_problem, numbers_problem, stamp_problem)
 from platform_tracking.state_machine import State as TrackerState
 
 import rospy
 from rospy.impl.paramserver import get_param_server_cache
-from landing_msgs.lockstep import LockstepAcker
+from landing_runtime.lockstep import LockstepAcker
 from landing_msgs.msg import Navdata
 from geometry_msgs.msg import PointStamped
-from landing_msgs.rospy_node import NodeHandles, run_node, unconnected_subscribers
+from landing_runtime.rospy_node import NodeHandles, run_node, unconnected_subscribers
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger, TriggerResponse

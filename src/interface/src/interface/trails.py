@@ -28,7 +28,7 @@ def main():
     import rospy
     from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import Path
-    from landing_msgs.rospy_node import init_node, spin
+    from landing_runtime.rospy_node import init_node, spin
     init_node("trails")
     try:
         seconds, spacing = float(rospy.get_param("~seconds")), float(rospy.get_param("~spacing"))

@@ -356,7 +356,7 @@ def main(argv=None):
                                                                     "on one topic")
     parser.add_argument("--burst-every", type=float, default=10.0, help="sim seconds between two bursts")
     args = parser.parse_args(rospy.myargv(argv if argv is not None else sys.argv)[1:])
-    from landing_msgs.rospy_node import init_node
+    from landing_runtime.rospy_node import init_node
     init_node("input_fuzzer")
     fuzzer = Fuzzer(args)
     fuzzer.wait_connected()

@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import rosbag
 
-from landing_msgs.geometry import yaw_from_quaternion
+from landing_runtime.geometry import yaw_from_quaternion
 
 ESTIMATE, IMU, TRUTH = "/ardrone/odom_estimate", "/ardrone/imu", "/groundtruth/ardrone"
 

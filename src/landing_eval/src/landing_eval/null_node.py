@@ -9,8 +9,8 @@ timer, or an input: NodeShape.driver). It acknowledges what the real node acknow
 """
 import rospy
 
-from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import direct_publisher, exit_promptly, init_node, spin, spin_at
+from landing_runtime.lockstep import LockstepAcker
+from landing_runtime.rospy_node import direct_publisher, exit_promptly, init_node, spin, spin_at
 
 
 class Publication:

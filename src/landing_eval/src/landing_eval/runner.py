@@ -19,7 +19,7 @@ import sys
 import threading
 import time
 
-from landing_msgs.rospy_node import NodeHandles
+from landing_runtime.rospy_node import NodeHandles
 
 from .isolated_ros import IsolatedCore, IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
 

@@ -1,5 +1,5 @@
 """`python -m landing_eval.runner_cli SCENARIO --out DIR`: run_scenario for subprocesses of the benchmark."""
-from landing_msgs.rospy_node import exit_promptly
+from landing_runtime.rospy_node import exit_promptly
 
 from .runner import main
 

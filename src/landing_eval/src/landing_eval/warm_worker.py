@@ -18,7 +18,7 @@ import signal
 import sys
 import threading
 
-from landing_msgs.rospy_node import exit_promptly
+from landing_runtime.rospy_node import exit_promptly
 
 from . import runner
 from . import scenario as scenario_mod

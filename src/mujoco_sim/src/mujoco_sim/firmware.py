@@ -6,7 +6,7 @@ A real AR.Drone flies its velocity and altitude loops on what it measures, not o
   the bottom camera (``flow_gain`` per second). The flow measures the motion relative to what the camera
   sees: over the ground, the drone's velocity; over the moving vehicle, its velocity relative to the
   vehicle (the simulator blends the two by how much of the view the vehicle's textured part, the pad,
-  covers: landing_msgs.camera_footprint).
+  covers: landing_runtime.camera_footprint).
 - Height and climb rate: the accelerometer, less its estimated vertical bias, pulled towards the sonar
   height, i.e. the height above whatever surface is below (the drone follows gentle terrain). A sonar
   height far from the estimate is an outlier unless it persists ``surface_step_time``: then the surface

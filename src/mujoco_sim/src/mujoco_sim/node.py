@@ -18,10 +18,10 @@ import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
-from landing_msgs.geometry import euler_from_quaternion
-from landing_msgs.input_check import RosRejectionLog
+from landing_runtime.geometry import euler_from_quaternion
+from landing_runtime.input_check import RosRejectionLog
 from landing_msgs.msg import Altimeter, LockstepAck, Navdata, Touchdown
-from landing_msgs.rospy_node import ended_by_shutdown, init_node, without_nagle
+from landing_runtime.rospy_node import ended_by_shutdown, init_node, without_nagle
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from rospy.impl.paramserver import get_param_server_cache
@@ -819,7 +819,7 @@ def _stop_listening_to_own_clock():
 def main():
     import warnings
     warnings.filterwarnings("ignore", message=".*queue_size.*")  # synchronous publishing is on purpose
-    init_node("mujoco_sim")  # rospy's own signal handler deadlocked here mid-publish (see landing_msgs.shutdown)
+    init_node("mujoco_sim")  # rospy's own signal handler deadlocked here mid-publish (see landing_runtime.shutdown)
     _stop_listening_to_own_clock()
     try:
         node = SimNode()

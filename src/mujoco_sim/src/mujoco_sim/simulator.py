@@ -12,8 +12,8 @@ import os
 
 import numpy as np
 
-from landing_msgs import camera_footprint
-from landing_msgs.geometry import yaw_from_quaternion
+from landing_runtime import camera_footprint
+from landing_runtime.geometry import yaw_from_quaternion
 
 from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix
 from .config import ConfigError

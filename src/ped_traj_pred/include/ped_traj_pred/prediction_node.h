@@ -19,8 +19,8 @@
 #include "ped_traj_pred/prediction_settings.h"
 
 #include <geometry_msgs/PointStamped.h>
-#include <landing_msgs/input_check.h>
-#include <landing_msgs/lockstep_acker.h>
+#include <landing_runtime/input_check.h>
+#include <landing_runtime/lockstep_acker.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
@@ -70,7 +70,7 @@ private:
   void onGps(const nav_msgs::Odometry::ConstPtr& msg);
   void onRelativeDetection(const geometry_msgs::PointStamped::ConstPtr& msg);
   /// A stamp too far from the clock, or a named value that is not finite or beyond +-limit.
-  std::optional<landing_msgs::InputProblem> inputProblem(const std_msgs::Header& header,
+  std::optional<landing_runtime::InputProblem> inputProblem(const std_msgs::Header& header,
                                                          std::initializer_list<std::pair<const char*, double>> values,
                                                          double limit) const;
   /// Variance of a world fix stamped `stamp`, from the range of the relative fix of the same frame.
@@ -90,9 +90,9 @@ private:
   ros::Subscriber detection_sub_, gps_sub_, relative_sub_;
   ros::Publisher path_pub_, odom_pub_;
   ros::Timer timer_;
-  std::optional<landing_msgs::LockstepAcker> lockstep_;  // created once pub_freq is known
+  std::optional<landing_runtime::LockstepAcker> lockstep_;  // created once pub_freq is known
   // Garbage on the inputs: what was wrong, once per topic and kind (optional: a reset makes a new one).
-  std::optional<landing_msgs::RejectionLog> rejections_;
+  std::optional<landing_runtime::RejectionLog> rejections_;
   ros::ServiceServer reset_service_;
 };
 

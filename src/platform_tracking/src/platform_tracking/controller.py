@@ -39,7 +39,7 @@ import dataclasses
 from typing import Optional, Sequence
 
 import numpy as np
-from landing_msgs.geometry import yaw_from_quaternion
+from landing_runtime.geometry import yaw_from_quaternion
 
 from .estimator import world_to_heading
 from .params import TrackingParams

@@ -38,7 +38,7 @@ import dataclasses
 import math
 
 import numpy as np
-from landing_msgs.geometry import turned_about_world_z, yaw_from_quaternion
+from landing_runtime.geometry import turned_about_world_z, yaw_from_quaternion
 
 from .flow_surface import rotation_of
 from .relative import RelativeTrack

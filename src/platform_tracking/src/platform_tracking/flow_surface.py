@@ -3,7 +3,7 @@
 The AR.Drone's firmware estimates its velocity with the optical flow of its bottom camera, and flies
 its velocity loop on that estimate. The flow measures motion relative to what the camera sees: over
 the ground the drone's velocity, over the vehicle its velocity relative to the vehicle, and in between
-a blend by how much of the view the vehicle's top covers (weight 0..1, landing_msgs.camera_footprint).
+a blend by how much of the view the vehicle's top covers (weight 0..1, landing_runtime.camera_footprint).
 So, with ``w`` that weight and ``v_pad`` the vehicle's velocity:
 
     navdata velocity = v_drone - w v_pad          (the estimator adds w v_pad back)
@@ -22,7 +22,7 @@ import collections
 import math
 
 import numpy as np
-from landing_msgs import camera_footprint
+from landing_runtime import camera_footprint
 
 from .params import FlowSurfaceParams
 

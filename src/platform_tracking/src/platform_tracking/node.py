@@ -30,14 +30,14 @@ use platform_tracking/command "land" for the gated landing on the pad.
 
 Restart and reset: respawned after a crash, the estimator starts again from the next GPS fix and the tracker from
 the latched platform_tracking/command and the drone's navdata state (nothing else is kept). Both offer ``~reset``
-(std_srvs/Trigger, landing_msgs.rospy_node.ResettableNode) for the next scenario of a warm graph: the parameters are
+(std_srvs/Trigger, landing_runtime.rospy_node.ResettableNode) for the next scenario of a warm graph: the parameters are
 read again as at start-up (a bad one refuses the reset, naming it; the node goes on as it was) and the node starts
 over as a fresh one: the estimator without a fix, the tracker LANDED with no request pending (``autostart`` takes
 off again), its latched platform_tracking/state LANDED again and no camera_latency latched until it measures one.
 
 Inputs that are garbage (non-finite or implausible values, stamps from another time, frames of another tree,
 unknown words) are dropped with a warning naming the topic and what was wrong, once per topic and kind of
-problem every WARN_PERIOD (landing_msgs.input_check).
+problem every WARN_PERIOD (landing_runtime.input_check).
 """
 import collections
 import dataclasses
@@ -47,11 +47,11 @@ import threading
 import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped, Twist, Vector3Stamped
-from landing_msgs.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
+from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
-from landing_msgs.lockstep import LockstepAcker
+from landing_runtime.lockstep import LockstepAcker
 from landing_msgs.msg import Altimeter, Navdata
-from landing_msgs.rospy_node import NodeHandles, direct_publisher, run_node
+from landing_runtime.rospy_node import NodeHandles, direct_publisher, run_node
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, Range
 from std_msgs.msg import Bool, Empty, Float64, String

@@ -13,8 +13,8 @@ import sys
 
 import rospy
 from geometry_msgs.msg import Twist
-from landing_msgs.lockstep import LockstepAcker
-from landing_msgs.rospy_node import NodeHandles, direct_publisher, run_node
+from landing_runtime.lockstep import LockstepAcker
+from landing_runtime.rospy_node import NodeHandles, direct_publisher, run_node
 from std_msgs.msg import Empty
 
 from .paths import PATHS, Path, PathError

@@ -1,7 +1,7 @@
 // Checks of incoming messages for the C++ nodes' ROS wrappers: the same limits and log lines as the Python
-// nodes' landing_msgs.input_check.
-//   landing_msgs::RejectionLog rejections;
-//   if (auto problem = landing_msgs::stampProblem(msg->header.stamp, ros::Time::now()))
+// nodes' landing_runtime.input_check.
+//   landing_runtime::RejectionLog rejections;
+//   if (auto problem = landing_runtime::stampProblem(msg->header.stamp, ros::Time::now()))
 //     return rejections.reject(topic, *problem);
 // Each kind of problem on each topic is logged once per period of the node's clock (sim time under the simulator,
 // as ROS_WARN_THROTTLE) with what was wrong and how many more were dropped since the last line.
@@ -17,7 +17,7 @@
 
 #include <ros/ros.h>
 
-namespace landing_msgs {
+namespace landing_runtime {
 
 // Limits of a plausible value (see input_check.py for the reasons).
 constexpr double kMaxPositionM = 1e5;
@@ -109,4 +109,4 @@ class RejectionLog {
   std::map<std::pair<std::string, std::string>, Entry> entries_;
 };
 
-}  // namespace landing_msgs
+}  // namespace landing_runtime

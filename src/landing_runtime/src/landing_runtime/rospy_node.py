@@ -1,6 +1,6 @@
 """Start and stop of this workspace's rospy nodes, with three of rospy's defaults mended.
 
-    from landing_msgs.rospy_node import init_node, spin
+    from landing_runtime.rospy_node import init_node, spin
     init_node("name")   # instead of rospy.init_node("name")
     ...
     spin()              # instead of rospy.spin()
@@ -15,7 +15,7 @@ A class that makes its subscribers, latched publishers and services through ``No
 ``run_node(..., resettable=True)`` offers ``~reset`` (ResettableNode). A node driven by its callbacks alone has
 no ``tick()``; run_node then only waits for the shutdown.
 
-- Signals: rospy's handler can deadlock mid-publish (see landing_msgs.shutdown); here a signal starts a
+- Signals: rospy's handler can deadlock mid-publish (see landing_runtime.shutdown); here a signal starts a
   thread that shuts rospy down.
 - Accept backlog: rospy's TCPROS server listens with a backlog of 5 and accepts in one thread. When a
   node subscribes to 20 of a publisher's topics at once (rosbag record does), the kernel drops the
@@ -35,7 +35,7 @@ import warnings
 
 import rospy
 
-from landing_msgs.shutdown import shutdown_on_signals
+from landing_runtime.shutdown import shutdown_on_signals
 
 ACCEPT_BACKLOG = 128  # pending inbound connections the kernel keeps for the TCPROS server [-]
 

@@ -9,7 +9,7 @@
 #include <landing_msgs/LockstepAck.h>
 #include <ros/ros.h>
 
-namespace landing_msgs {
+namespace landing_runtime {
 
 class LockstepAcker {
  public:
@@ -27,11 +27,11 @@ class LockstepAcker {
     msg_.node = ros::this_node::getName();
     msg_.input = input;
     msg_.period = period;
-    publisher_ = nh.advertise<LockstepAck>("lockstep_ack", 10);
+    publisher_ = nh.advertise<landing_msgs::LockstepAck>("lockstep_ack", 10);
   }
 
   ros::Publisher publisher_;
-  LockstepAck msg_;
+  landing_msgs::LockstepAck msg_;
 };
 
-}  // namespace landing_msgs
+}  // namespace landing_runtime

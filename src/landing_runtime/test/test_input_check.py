@@ -1,7 +1,7 @@
 """The checks every node wrapper applies to its inputs, and the throttled log of what it dropped (ROS-free)."""
 import math
 
-from landing_msgs.input_check import (MAX_POSITION_M, RejectionLog, choice_problem, frame_problem, numbers_problem,
+from landing_runtime.input_check import (MAX_POSITION_M, RejectionLog, choice_problem, frame_problem, numbers_problem,
                                       stamp_problem)
 
 

@@ -1,11 +1,11 @@
-"""landing_msgs.testing.wait_for and resend_until: the shared waits of the tests."""
+"""landing_runtime.testing.wait_for and resend_until: the shared waits of the tests."""
 import subprocess
 import sys
 import time
 
 import pytest
 
-from landing_msgs.testing import resend_until, wait_for
+from landing_runtime.testing import resend_until, wait_for
 
 
 def test_returns_the_first_true_value():

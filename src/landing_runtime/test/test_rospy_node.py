@@ -1,4 +1,4 @@
-"""landing_msgs.rospy_node against a real master: the node accepts a burst of connections while its accept
+"""landing_runtime.rospy_node against a real master: the node accepts a burst of connections while its accept
 thread is stuck, and SIGINT ends spin() and a sleep on a sim clock that has stopped. How soon they end is
 measured in run_scenario's shut-down (nodes gone 0.25 s after the interrupt instead of 0.5 s), not timed here."""
 import signal
@@ -10,7 +10,7 @@ NODE = """
 import rospy
 from std_msgs.msg import String
 from rospy.impl import tcpros_base
-from landing_msgs.rospy_node import init_node, spin
+from landing_runtime.rospy_node import init_node, spin
 init_node("burst_listener")
 rospy.Publisher("chatter", String, queue_size=1)
 print("port %d" % tcpros_base.init_tcpros_server().get_address()[1], flush=True)
@@ -71,7 +71,7 @@ def test_sigint_ends_a_sleep_on_a_stopped_sim_clock(ros_master):
 # closed one. {guard} is the loop's context ("contextlib.nullcontext()" = without it).
 PUBLISHING_NODE = NODE.format(wait="""
 import contextlib
-from landing_msgs.rospy_node import direct_publisher, ended_by_shutdown
+from landing_runtime.rospy_node import direct_publisher, ended_by_shutdown
 import time
 fast = [direct_publisher("fast%d" % i, String) for i in range(40)]
 listeners = [rospy.Subscriber("fast%d" % i, String, lambda _: None) for i in range(40)]  # connections to close
@@ -107,7 +107,7 @@ def test_a_stop_in_the_middle_of_a_publish_ends_the_loop_quietly(ros_master):
 
 TICKING_NODE = """
 import sys
-from landing_msgs.rospy_node import run_node, spin_at
+from landing_runtime.rospy_node import run_node, spin_at
 
 class Node:
     def __init__(self):
@@ -144,7 +144,7 @@ def test_run_node_turns_a_startup_error_into_a_fatal_message_and_exit_status_2(r
 
 # Ends with exit_promptly while rospy is still up and its last line is still in stdout's buffer (a pipe).
 PROMPT_EXIT = NODE.format(wait="""
-from landing_msgs.rospy_node import exit_promptly
+from landing_runtime.rospy_node import exit_promptly
 print("last words")
 exit_promptly(3)""")
 
@@ -165,7 +165,7 @@ DIRECT = """
 import socket, time
 import rospy
 from std_msgs.msg import String
-from landing_msgs.rospy_node import direct_publisher, init_node
+from landing_runtime.rospy_node import direct_publisher, init_node
 init_node("direct_talker")
 publisher = direct_publisher("chatter", String)
 assert publisher.impl.queue_size is None  # written in the publishing thread: no QueuedConnection

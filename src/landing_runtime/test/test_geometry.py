@@ -1,9 +1,9 @@
-"""landing_msgs.geometry against rotations built by hand (axis-angle products)."""
+"""landing_runtime.geometry against rotations built by hand (axis-angle products)."""
 import math
 
 import pytest
 
-from landing_msgs.geometry import euler_from_quaternion, yaw_from_quaternion
+from landing_runtime.geometry import euler_from_quaternion, yaw_from_quaternion
 
 
 def about(axis, angle):

@@ -28,7 +28,7 @@ MAX_ACCEL_MPS2 = 1e3     # accelerations, specific forces [m/s^2]
 # Stamps: a message is about the recent past. Later than the node's clock by more than MAX_FUTURE_S it comes
 # from the future (the clock of /clock ticks at 60 Hz: a message may be stamped a tick ahead of a subscriber's
 # clock); older than MAX_AGE_S it is from another time (the harsh profile's links deliver within 0.3 s; a
-# node restarts its filters when time jumps back by a second). landing_msgs/input_check.h has the same limits.
+# node restarts its filters when time jumps back by a second). landing_runtime/input_check.h has the same limits.
 MAX_FUTURE_S = 0.5
 MAX_AGE_S = 2.0
 

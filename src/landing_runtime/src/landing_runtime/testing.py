@@ -1,6 +1,6 @@
 """Test tooling every package's tests share (rostests and pytest alike).
 
-    from landing_msgs.testing import wait_for
+    from landing_runtime.testing import wait_for
     wait_for(lambda: messages, "a message on /topic", timeout=60)
 """
 import sys

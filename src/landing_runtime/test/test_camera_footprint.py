@@ -1,9 +1,9 @@
-"""The share of a downward camera's view a rectangle covers (landing_msgs.camera_footprint)."""
+"""The share of a downward camera's view a rectangle covers (landing_runtime.camera_footprint)."""
 import math
 
 import pytest
 
-from landing_msgs import camera_footprint as cf
+from landing_runtime import camera_footprint as cf
 
 LEVEL = ((0.0, -1.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 0.0, -1.0))  # world <- optical for a level camera, yaw 0
 

@@ -8,7 +8,7 @@ Outside the simulator nobody listens and the acknowledgements cost nothing (rosp
 import rospy
 
 from landing_msgs.msg import LockstepAck
-from landing_msgs.rospy_node import direct_publisher
+from landing_runtime.rospy_node import direct_publisher
 
 TOPIC = "lockstep_ack"
 CLOCK_INPUT = "/clock"

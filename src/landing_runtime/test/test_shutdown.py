@@ -5,7 +5,7 @@ import threading
 
 import rospy
 
-from landing_msgs.shutdown import shutdown_on_signals
+from landing_runtime.shutdown import shutdown_on_signals
 
 
 def test_a_signal_shuts_rospy_down_from_another_thread_while_the_interrupted_thread_holds_a_lock(monkeypatch):
