@@ -14,6 +14,7 @@ import threading
 
 import rospy
 from geometry_msgs.msg import PointStamped, Twist
+from landing_runtime.message_constants import message_constants
 from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, RosRejectionLog, choice_problem, first_problem,
                                       frame_problem, numbers_problem, stamp_problem)
 from landing_runtime.lockstep import LockstepAcker
@@ -29,7 +30,7 @@ from .supervisor_measures import flight_from_navdata
 
 ENGAGE = ("on_mode", "immediately")
 MODES = tuple(mode.value for mode in Mode)
-NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes
+NAVDATA_STATES = message_constants(Navdata, "STATE_")
 WORLD_FRAME, BODY_FRAME = "world", "ardrone/base_link"  # docs/conventions.md
 
 

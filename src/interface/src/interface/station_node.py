@@ -21,10 +21,10 @@ import time
 import rospy
 from ardrone_moves.node import DroneCommands
 from geometry_msgs.msg import PointStamped
+from landing_runtime.message_constants import message_constants
 from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
-from platform_tracking.state_machine import State as TrackerState
-from landing_msgs.msg import Altimeter, PositionXYCommand
+from landing_msgs.msg import Altimeter, PositionXYCommand, TrackerState
 from landing_runtime.rospy_node import init_node
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Range
@@ -42,7 +42,7 @@ from .supervisor import Mode
 
 MODES = tuple(mode.value for mode in Mode)
 MAX_CAMERA_LATENCY_S = 10.0  # a camera latency beyond this is garbage, not a link [s]
-TRACKER_STATES = tuple(state.value for state in TrackerState)
+TRACKER_STATES = message_constants(TrackerState)
 
 
 def _header_problem(msg, frame="world"):

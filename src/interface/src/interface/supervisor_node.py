@@ -27,14 +27,14 @@ import sys
 import threading
 import time
 
+from landing_runtime.message_constants import message_constants
 from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem, first_problem,
                                       frame_problem, numbers_problem, stamp_problem)
-from platform_tracking.state_machine import State as TrackerState
 
 import rospy
 from rospy.impl.paramserver import get_param_server_cache
 from landing_runtime.lockstep import LockstepAcker
-from landing_msgs.msg import Navdata
+from landing_msgs.msg import Navdata, TrackerState
 from geometry_msgs.msg import PointStamped
 from landing_runtime.rospy_node import NodeHandles, run_node, unconnected_subscribers
 from nav_msgs.msg import Odometry
@@ -50,8 +50,8 @@ from .supervisor_measures import PlatformSpeed, SensorWatchdog, TargetLostTimer,
 SENSOR_TOPICS = {"camera_silence_s": "ardrone/bottom/camera_info", "imu_silence_s": "ardrone/imu",
                  "odometry_silence_s": "ardrone/gps/odom", "sonar_silence_s": "ardrone/sonar_height"}
 SERVICES = ("landing", "emergency", "manual", "continue")
-TRACKER_STATES = tuple(state.value for state in TrackerState)
-NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes
+TRACKER_STATES = message_constants(TrackerState)
+NAVDATA_STATES = message_constants(Navdata, "STATE_")
 WORLD_FRAME, BODY_FRAME = "world", "ardrone/base_link"  # docs/conventions.md
 DECISIONS_WAIT_S = 3.0  # wall seconds decisions wait at the start for supervisor/decisions' subscribers to connect
 REPEAT_S = 2.0  # the same operator word again within this (sim) time is a repetition, not a new command [s]
