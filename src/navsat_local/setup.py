@@ -1,4 +1,4 @@
 from catkin_pkg.python_setup import generate_distutils_setup
 from setuptools import setup
 
-setup(**generate_distutils_setup(packages=["uav_vision"], package_dir={"": "src"}))
+setup(**generate_distutils_setup(packages=["navsat_local"], package_dir={"": "src"}))

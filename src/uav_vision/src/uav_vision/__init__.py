@@ -1,1 +1,0 @@
-"""Python tools of uav_vision: rendered test frames and the detection benchmark (the detector is C++)."""
