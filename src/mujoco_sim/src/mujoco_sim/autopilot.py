@@ -198,8 +198,15 @@ class Autopilot:
         if horizontal > max_horizontal:
             fx, fy = fx * max_horizontal / horizontal, fy * max_horizontal / horizontal
 
-        # Yaw reference follows the commanded rate, kept near the actual yaw to avoid wind-up.
         yaw_rate = max(-p["max_yaw_rate"], min(p["max_yaw_rate"], command.yaw_rate))
+        return self._attitude_thrusts(dt, fx, fy, fz, yaw, yaw_rate, r1, r2, r3, omega)
+
+    def _attitude_thrusts(self, dt, fx, fy, fz, yaw, yaw_rate, r1, r2, r3, omega):
+        """Rotor thrusts that turn the body's z axis along the force (fx, fy, fz) [N, world frame], give it that
+        force's component along the body z axis, and turn the heading at ``yaw_rate`` [rad/s]. ``yaw`` is the
+        present heading, r1..r3 the columns of the body rotation."""
+        p = self.p
+        # Yaw reference follows the commanded rate, kept near the actual yaw to avoid wind-up.
         if self.yaw_ref is None:
             self.yaw_ref = yaw
         self.yaw_ref = yaw + max(-0.5, min(0.5, wrap_angle(self.yaw_ref + yaw_rate * dt - yaw)))

@@ -15,9 +15,12 @@ _VEHICLE = {
     "gps_rate_hz": Param(F, 0.1, 100.0, "Hz"),
 }
 
+DRONE_MODELS = ("velocity_quad", "ardrone2")
+
 SIM_SCHEMA = {
     "seed": Param(I, 0),
     "vehicle": Param(S, choices=("summit_xl", "car")),
+    "drone_model": Param(S, choices=DRONE_MODELS),
     "real_time_factor": Param(F, 0.0, 1000.0),
     "lockstep": {
         "enabled": Param(B),
@@ -96,6 +99,27 @@ SIM_SCHEMA = {
         "drag_area_horizontal": Param(F, 0.0, 1.0, "m^2"),
         "drag_area_vertical": Param(F, 0.0, 1.0, "m^2"),
     },
+    # The driver's and firmware's parameters: ranges as the firmware accepts them (ardrone_autonomy's docs).
+    "ardrone2": {
+        "euler_angle_max": Param(F, 0.0, 0.52, "rad"),
+        "control_vz_max": Param(F, 200.0, 2000.0, "mm/s"),
+        "control_yaw": Param(F, 0.7, 6.11, "rad/s"),
+        "altitude_max": Param(I, 500, 100000, "mm"),
+        "altitude_min": Param(I, 0, 100000, "mm"),
+        "takeoff_height": Param(F, 0.3, 2.0, "m"),
+        "takeoff_speed": Param(F, 0.1, 2.0, "m/s"),
+        "land_speed": Param(F, 0.1, 2.0, "m/s"),
+        "rotor_drag": Param(F, 0.0, 2.0, "N/(m/s)"),
+        "driver_resend_hz": Param(F, 0.0, 200.0, "Hz"),
+        "watchdog_hover_s": Param(F, 0.1, 60.0, "s"),
+        "watchdog_land_s": Param(F, 0.0, 600.0, "s"),
+        "navdata_demo": Param(I, 0, 1),
+        "looprate": Param(I, 1, 1000, "Hz"),
+        "realtime_navdata": Param(B),
+        "altd_unit": Param(S, choices=("mm", "cm")),
+        "video_channel": Param(I, 0, 1),
+        "camera_switch_delay_s": Param(F, 0.0, 5.0, "s"),
+    },
     "vehicle_start": {
         "x": Param(F, -1e4, 1e4, "m"),
         "y": Param(F, -1e4, 1e4, "m"),
@@ -135,9 +159,12 @@ def validate_sim_config(tree, source):
     config["realism"] = validate_realism(realism_tree, source)
     if config["firmware"]["coverage_low"] >= config["firmware"]["coverage_high"]:
         raise ConfigError("%s: parameter 'firmware/coverage_low' must be below 'firmware/coverage_high'" % source)
+    ardrone = config["ardrone2"]
+    if ardrone["altitude_min"] >= ardrone["altitude_max"]:
+        raise ConfigError("%s: parameter 'ardrone2/altitude_min' (%d mm) must be below 'ardrone2/altitude_max' (%d mm)"
+                          % (source, ardrone["altitude_min"], ardrone["altitude_max"]))
     start = config["drone"]["start_position"]
     if len(start) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in start):
-        from .config import ConfigError
         raise ConfigError("%s: parameter 'drone/start_position': got %r, expected [x, y, z] in m" % (source, start))
     config["drone"]["start_position"] = [float(v) for v in start]
     config["battery"]["initial_percent"] = config["conditions"]["drone_battery"]

@@ -15,6 +15,8 @@ import numpy as np
 from landing_runtime import camera_footprint
 from landing_runtime.geometry import yaw_from_quaternion
 
+from .ardrone_firmware import ArdroneDriver, ArdroneFirmware, CameraChannel, NavdataSchedule
+from .ardrone_navdata import navdata_fields
 from .autopilot import HOLD, Autopilot, FlightMode, VelocityCommand, quat_to_matrix
 from .config import ConfigError
 from .environment import Battery, Wind, aerodynamic_force
@@ -127,8 +129,27 @@ class Simulator:
             x, y = m.site_pos[site][:2]
             rotors.append((float(x), float(y), float(m.actuator_gear[act][5])))
         mass = float(m.body_mass[self.drone_body])
-        self.autopilot = Autopilot(drone, mass, m.body_inertia[self.drone_body].copy(), rotors,
-                                   max_rotor_thrust=float(m.actuator_ctrlrange[self.rotor_actuators[0]][1]))
+        max_rotor_thrust = float(m.actuator_ctrlrange[self.rotor_actuators[0]][1])
+        # The drone model: the velocity-commanded quadrotor, or the AR.Drone 2.0 behind its driver (tilt commands,
+        # auto-hover, watchdog, navdata and camera channel as the real one has them).
+        self.drone_model = config["drone_model"]
+        self.ardrone = self.drone_model == "ardrone2"
+        self.ardrone_driver = self.camera_channel = self.navdata_schedule = None
+        if self.ardrone:
+            a = config["ardrone2"]
+            self.autopilot = ArdroneFirmware(drone, a, mass, m.body_inertia[self.drone_body].copy(), rotors,
+                                             max_rotor_thrust)
+            self.ardrone_driver = ArdroneDriver()
+            self.camera_channel = CameraChannel(a["camera_switch_delay_s"], lambda: self.time, a["video_channel"])
+            self.navdata_schedule = NavdataSchedule(a["navdata_demo"], a["looprate"], a["realtime_navdata"])
+            self.rotor_drag = a["rotor_drag"]
+            self.altd_scale = 1000.0 if a["altd_unit"] == "mm" else 100.0  # navdata altd per metre
+            self.next_at_command = 0.0   # when the driver's SDK sends the stored command again [s]
+            self.surface_z = 0.0         # height of the surface below (ideal firmware's altitude) [m]
+            self.surface_due = 0.0
+        else:
+            self.autopilot = Autopilot(drone, mass, m.body_inertia[self.drone_body].copy(), rotors, max_rotor_thrust)
+        self.wifi_outage_until = -1.0
         self.max_total_thrust = 4 * self.autopilot.max_rotor_thrust
         self.command = HOLD
         self.command_time = -1e9
@@ -243,14 +264,42 @@ class Simulator:
     def set_velocity_command(self, vx, vy, vz, yaw_rate):
         """Returns None when accepted, else why the command was ignored (the drone then holds). An accepted
         command reaches the drone after the command link's latency, or is lost (realism)."""
+        if self.ardrone:
+            raise RuntimeError("set_velocity_command needs drone_model velocity_quad (this world flies ardrone2: "
+                               "use set_ardrone_command)")
         problem = VelocityCommand.problem((vx, vy, vz, yaw_rate))
         if problem:
             self._send(self._hold)
             return problem
+        if self.time < self.wifi_outage_until:
+            return None
         if self.command_link.loss > 0.0 and self.command_link.lost_next():
             return None
         self._send(lambda: self._apply_velocity_command(VelocityCommand(vx, vy, vz, yaw_rate)))
         return None
+
+    def set_ardrone_command(self, lx, ly, lz, ax, ay, az):
+        """drone_model ardrone2: a cmd_vel reached the driver (linear x, y, z, angular x, y, z; see
+        ardrone_firmware). Returns None when the driver took it (components outside [-1, 1] clipped: counted in
+        ardrone_driver.clipped), else why it refused it (a non-finite component; the previous command stays).
+        The driver's SDK sends the kept command to the drone every 1/driver_resend_hz s, over the command link
+        (latency, losses); with driver_resend_hz 0 it is sent once, now."""
+        if not self.ardrone:
+            raise RuntimeError("set_ardrone_command needs drone_model ardrone2 (this world flies %s: "
+                               "use set_velocity_command)" % self.drone_model)
+        problem = self.ardrone_driver.receive((lx, ly, lz, ax, ay, az))
+        if problem is None and self.cfg["ardrone2"]["driver_resend_hz"] <= 0.0:
+            self._send_ardrone_command()
+        return problem
+
+    def _send_ardrone_command(self):
+        """One AT command with the driver's kept command, over the command link (it may be lost)."""
+        if self.time < self.wifi_outage_until:
+            return
+        if self.command_link.loss > 0.0 and self.command_link.lost_next():
+            return
+        command = self.ardrone_driver.command
+        self._send(lambda: self.autopilot.receive_command(command, self.time))
 
     def _hold(self):
         self.command = HOLD
@@ -286,6 +335,8 @@ class Simulator:
         z = float(self.data.qpos[self.drone_qpos + 2])
         # The climb is measured as the autopilot sees the height: its own estimate, if it flies on it.
         flown_z = self.firmware.height if self.firmware is not None and self.firmware.ready else z
+        if self.ardrone:
+            self.autopilot.heard(self.time)
         if self.autopilot.takeoff(flown_z):
             self._takeoff_z = z
             self.touchdown = None
@@ -293,7 +344,12 @@ class Simulator:
         return False
 
     def land(self):
-        return self._send(self.autopilot.land)
+        return self._send(self._land)
+
+    def _land(self):
+        if self.ardrone:
+            self.autopilot.heard(self.time)
+        return self.autopilot.land()
 
     def reset(self):
         """Back to the start, motors off, as after /ardrone/reset."""
@@ -337,18 +393,31 @@ class Simulator:
                 action()
         if now - self.command_time > self.cfg["drone"]["command_timeout"]:
             self.command = HOLD
+        if self.ardrone:
+            self._driver_and_watchdog_step(now)
         self.wind.step(dt)
         airborne = self.autopilot.airborne_control
         if airborne or position[2] > 0.3:
-            d.xfrc_applied[self.drone_body, :3] = aerodynamic_force(self.wind.velocity(), velocity, self.drag_area)
+            wind = self.wind.velocity()
+            force = aerodynamic_force(wind, velocity, self.drag_area)
+            if self.ardrone and airborne:
+                # Rotor drag, proportional to the air speed, while the rotors turn (horizontal, in the world frame: at
+                # the firmware's tilts the rotor plane is within 30 deg of level).
+                force[:2] -= self.rotor_drag * (velocity[:2] - wind[:2])
+            d.xfrc_applied[self.drone_body, :3] = force
         else:
             d.xfrc_applied[self.drone_body, :3] = 0.0
         if self.firmware is not None:
             flown_position, flown_velocity = self._firmware_step(now, dt, quat)
         else:
             flown_position, flown_velocity = position, velocity
-        thrusts = self.autopilot.update(dt, flown_position, flown_velocity, quat, omega, self.command,
-                                        power_available=not self.battery.empty)
+        if self.ardrone:
+            thrusts = self.autopilot.update(dt, flown_position, flown_velocity, quat, omega,
+                                            power_available=not self.battery.empty,
+                                            altitude=self._firmware_altitude(now, position, quat))
+        else:
+            thrusts = self.autopilot.update(dt, flown_position, flown_velocity, quat, omega, self.command,
+                                            power_available=not self.battery.empty)
         d.ctrl[self.rotor_ctrl] = thrusts
         self._drive_vehicle(dt, now)
         if self.false_target_mocap >= 0:
@@ -363,6 +432,44 @@ class Simulator:
         self.battery.step(dt, thrust_fraction, self.temperature, motors_on=airborne)
         if d.ncon:
             self._check_contacts(velocity)
+
+    def _driver_and_watchdog_step(self, now):
+        """drone_model ardrone2: the driver's SDK sends its kept command again; the firmware's watchdog."""
+        rate = self.cfg["ardrone2"]["driver_resend_hz"]
+        if rate > 0.0 and now + 1e-9 >= self.next_at_command:
+            self.next_at_command = max(self.next_at_command + 1.0 / rate, now)
+            self._send_ardrone_command()
+        self.autopilot.watchdog(now)
+        bias_x, bias_y, _ = self.accel_bias.value.tolist()
+        # The firmware levels on its attitude estimate, which the accelerometer's bias tilts (see imu()).
+        self.autopilot.attitude_error = (bias_y / 9.81, -bias_x / 9.81)
+
+    def _firmware_altitude(self, now, position, quat):
+        """The AR.Drone firmware's altitude (navdata altd) [m]: its feet above the surface below. On its own
+        estimate (realism: firmware_on_estimate), else the true height above the surface a ray finds at the
+        sonar's rate."""
+        if self.firmware is not None:
+            return None if self.firmware.height is None else self.firmware.height - FOOT_CLEARANCE
+        z = float(position[2])
+        if now + 1e-9 >= self.surface_due:
+            self.surface_due = now + 1.0 / self.cfg["rates"]["sonar_hz"]
+            rotation = quat_to_matrix(quat)
+            distance = self.sonar_distance_true(position, rotation)
+            if math.isfinite(distance):
+                self.surface_z = z - distance * float(rotation[2, 2])
+        return z - self.surface_z - FOOT_CLEARANCE
+
+    def ardrone_altitude(self):
+        """drone_model ardrone2: the firmware's altitude above the surface below [m] (navdata altd in metres)."""
+        if self.firmware is not None:
+            height = self.firmware.height
+            return 0.0 if height is None else height - FOOT_CLEARANCE
+        return float(self.data.qpos[self.drone_qpos + 2]) - self.surface_z - FOOT_CLEARANCE
+
+    def ardrone_navdata(self):
+        """drone_model ardrone2: the fields of ardrone_autonomy/Navdata as the driver fills them, in its units
+        (a dict by field name; see ardrone_navdata.navdata_fields)."""
+        return navdata_fields(self)
 
     def _firmware_step(self, now, dt, quat):
         """The on-board estimate the autopilot flies on: (position with the estimated height above the
@@ -479,7 +586,10 @@ class Simulator:
         tilt = math.degrees(math.acos(max(-1.0, min(1.0, rotation[2, 2]))))
         limits = self.cfg["touchdown"]
         surface, crashed = classify_touchdown(surface, impact, tilt, limits["crash_speed"], limits["crash_tilt_deg"])
-        if not crashed and mode != FlightMode.LANDING and self.command.vz > 0:
+        if self.ardrone:
+            if not crashed and mode != FlightMode.LANDING:
+                return  # the AR.Drone touches down only after the land command: else it flies on (altitude_min)
+        elif not crashed and mode != FlightMode.LANDING and self.command.vz > 0:
             return  # a graze while climbing is not a landing
         pad = d.site_xpos[self.pad_site]
         position = d.qpos[self.drone_qpos:self.drone_qpos + 3].copy()
@@ -490,7 +600,7 @@ class Simulator:
         LOG.info(self.touchdown.describe())
 
     # ----- faults (robustness scenarios) --------------------------------------------------------
-    FAULTS = ("camera_blackout", "detection_false_target")
+    FAULTS = ("camera_blackout", "detection_false_target", "wifi_outage")
 
     def inject_fault(self, fault, duration_s):
         """Start a fault for ``duration_s`` sim seconds; returns False for an unknown fault."""
@@ -499,10 +609,18 @@ class Simulator:
             self.camera_blackout_until = until
         elif fault == "detection_false_target" and self.false_target_mocap >= 0:
             self.false_target_until = until
+        elif fault == "wifi_outage":
+            # No command reaches the drone (drone_model ardrone2: the firmware's watchdog hovers, then lands;
+            # velocity_quad: the velocity commands are lost). The node may drop what the drone sends meanwhile
+            # too (wifi_outage_active).
+            self.wifi_outage_until = until
         else:
             return False
         LOG.info("fault %s for %.1f s", fault, duration_s)
         return True
+
+    def wifi_outage_active(self):
+        return self.time < self.wifi_outage_until
 
     def camera_blacked_out(self):
         return self.time < self.camera_blackout_until
