@@ -21,7 +21,7 @@ APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip pytho
   python3-std-srvs libstd-srvs-dev libyaml-cpp-dev \
   python3-aiohttp chromium chromium-driver python3-selenium libjemalloc2 librosbag-storage-dev libtopic-tools-dev
 
-.PHONY: all deps build test demo bench clean
+.PHONY: all deps build test check demo bench clean
 
 all: build
 
@@ -42,15 +42,27 @@ $(STAMPS)/venv: requirements.txt $(STAMPS)/apt
 	$(VENV)/bin/pip install -q --disable-pip-version-check -r requirements.txt
 	@touch $@
 
-# So that `.venv/bin/python -m landing_eval.analyze BAG --out DIR` works in a shell where nothing is sourced.
+# So that `.venv/bin/python -m landing_eval.analyze BAG --out DIR` works in a shell where nothing is sourced: the
+# entry point (landing_eval) and the ROS-free analysis it calls (flight_analysis).
 $(STAMPS)/pth: Makefile $(STAMPS)/venv
 	site="$$($(VENV)/bin/python -c 'import site; print(site.getsitepackages()[0])')"; \
-	rm -f "$$site/landing_interface.pth"; echo "$(WS)/src/landing_eval/src" > "$$site/landing_eval.pth"
+	rm -f "$$site/landing_interface.pth"; \
+	printf '%s\n' "$(WS)/src/landing_eval/src" "$(WS)/src/flight_analysis/src" > "$$site/landing_eval.pth"
 	@touch $@
 
 deps: $(STAMPS)/venv $(STAMPS)/pth
 
+# The message-only stand-ins for the drivers' interfaces (src/ardrone_autonomy) are built only where the real
+# package is not installed: a real one in /opt/ros, /usr/share or a sourced underlay (CMAKE_PREFIX_PATH) wins,
+# and the stand-in gets a CATKIN_IGNORE.
+STANDINS := ardrone_autonomy
 build: deps
+	@for pkg in $(STANDINS); do \
+	  real=""; for prefix in /opt/ros/* /usr $$(echo "$${CMAKE_PREFIX_PATH:-}" | tr ':' ' '); do \
+	    case "$$prefix" in "$(WS)"*) continue;; esac; \
+	    [ -f "$$prefix/share/$$pkg/package.xml" ] && real="$$prefix/share/$$pkg"; done; \
+	  if [ -n "$$real" ]; then echo "== $$pkg: the real package in $$real is used (src/$$pkg ignored)"; \
+	    touch src/$$pkg/CATKIN_IGNORE; else rm -f src/$$pkg/CATKIN_IGNORE; fi; done
 	@echo "== catkin_make"
 	export PATH="$(VENV)/bin:$$PATH"; \
 	catkin_make -C $(WS) -j$(JOBS) -DPYTHON_EXECUTABLE=$(VENV)/bin/python -DCMAKE_BUILD_TYPE=Release \
@@ -64,6 +76,10 @@ build: deps
 test: build
 	bash tests/run_all.sh
 
+# The fast tier: unit tests and gtests (under 2 minutes on 2 cores); make test runs them too, and the rest.
+check: build
+	bash tests/run_check.sh
+
 DEMO_SCENARIO ?= scenarios/summit_circle_1ms.yaml
 demo: build
 	@echo "== demo: one headless landing on the moving Summit XL ($(DEMO_SCENARIO))"
@@ -76,7 +92,7 @@ demo: build
 # On a Ray cluster: make bench BENCH_ARGS="--ray auto"
 BENCH_ARGS ?= --jobs 2
 bench: build
-	source env.sh && rosrun landing_eval bench_sim
+	source env.sh && rosrun landing_bench bench_sim
 	source env.sh && rosrun landing_eval benchmark scenarios --out results/bench $(BENCH_ARGS) --readme README.md
 	@echo "== results table written to README.md (Results section) and results/bench/summary.md"
 

@@ -24,6 +24,8 @@ STRICT_IMPORTS = os.environ.get("LANDING_TESTS_STRICT_IMPORTS") == "1"
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "needs_pty: the test types into a pseudo-terminal")
+    config.addinivalue_line("markers", "slow: needs a ROS master, a terminal or minutes: make check leaves it out "
+                                       "(make test runs it)")
     # Tests stop their children with SIGINT as Ctrl-C does. Started in the background of a script (`make test &`,
     # nohup), this process begins with SIGINT ignored, which every child would inherit and so shrug the test's
     # Ctrl-C off (a benchmark sweep ran on to its end): here it is Ctrl-C's own again, and so in the children.

@@ -142,3 +142,10 @@ def test_shipped_config_values_are_accepted():
         params = yaml.safe_load(stream)
     check = AltdUnitCheck(params["altd_unit"], samples_needed=params["altd_check_samples"])
     assert check.configured_unit in ("mm", "cm") and check.samples_needed == 20
+
+
+def test_pressure_altitude_is_zero_at_the_reference_and_about_8_m_per_hpa_near_sea_level():
+    from ardrone_moves.navdata_units import pressure_altitude
+    assert pressure_altitude(101325.0, 101325.0) == 0.0
+    assert 8.0 < pressure_altitude(101325.0 - 100.0, 101325.0) < 8.6
+    assert pressure_altitude(101325.0 + 100.0, 101325.0) < 0.0

@@ -108,6 +108,12 @@ def convert_fields(vx, vy, vz, rotX, rotY, rotZ, altd, ax, ay, az, batteryPercen
         pressure=n["pressure"] if n["pressure"] != 0.0 else None, stamp=stamp), None)
 
 
+def pressure_altitude(pressure, reference_pressure):
+    """Height [m] above where the barometer read ``reference_pressure`` [Pa], from ``pressure`` [Pa]: the
+    international standard atmosphere's barometric formula (good to about 1 % over the few metres flown)."""
+    return 44330.77 * (1.0 - (pressure / reference_pressure) ** 0.190263)
+
+
 def convert_navdata(message, altd_unit, stamp=None, limits=NavdataLimits()):
     """A Navdata message (or any object / dict with its field names) -> Conversion.
 
