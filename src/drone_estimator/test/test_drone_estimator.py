@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from drone_estimator.estimator import DroneEstimator, heading_to_world, world_to_heading
+from drone_estimator.params import EstimatorParams
 from landing_runtime.geometry import yaw_from_quaternion
-from platform_tracking.estimator import DroneEstimator, heading_to_world, world_to_heading
-from platform_tracking.params import EstimatorParams
 
 GPS_STD, FLOW_STD, ALT_STD, SONAR_STD = 0.3, 0.05, 0.1, 0.01
 
@@ -394,8 +394,8 @@ def test_late_gps_fixes_are_compared_with_the_estimate_of_their_instant():
 def test_over_the_vehicle_the_flow_sees_the_drone_relative_to_it_and_the_estimate_adds_the_vehicle_back():
     """Hovering 0.8 m above a pad that drives at 2 m/s: the flow reads the drone's velocity relative to the
     pad (about zero); the estimate must still say 2 m/s, from the vehicle's reported velocity."""
-    from platform_tracking.flow_surface import FlowSurface
-    from platform_tracking.params import FlowSurfaceParams
+    from drone_estimator.flow_surface import FlowSurface
+    from drone_estimator.params import FlowSurfaceParams
 
     def riding(t):
         return (2.0 * t, 0.0, 1.3), (2.0, 0.0, 0.0), 0.0
@@ -485,7 +485,7 @@ def test_inertial_velocity_follows_a_trusted_reference_and_coasts_through_an_unt
     """The complementary filter: a reading with the usual uncertainty pulls the velocity to it within a fraction
     of a second; a reading whose uncertainty is metres per second (a fast vehicle, the flow's weight unsure)
     barely moves it, and the accelerometer carries a ramp instead."""
-    from platform_tracking.estimator import InertialVelocity
+    from drone_estimator.estimator import InertialVelocity
     filt = InertialVelocity(gain=20.0, reference_std=0.5)
     assert not filt.fresh(0.0)
     assert filt.correct(0.0, (3.0, 0.0), 0.0) == pytest.approx((3.0, 0.0))  # no accelerations yet: the reading
@@ -512,7 +512,7 @@ def test_a_late_reading_is_compared_with_the_inertial_velocity_of_its_own_instan
     """Navdata comes a link's delay after the IMU has carried the velocity on (harsh: a sample later). Accelerating
     at 3 m/s^2 with each reading 0.04 s older than the latest acceleration, the velocity keeps up with the truth; pulled
     towards the reading as if it were current it lagged 0.12 m/s behind (0.04 s), and the position with it."""
-    from platform_tracking.estimator import InertialVelocity
+    from drone_estimator.estimator import InertialVelocity
     filt = InertialVelocity(gain=20.0, reference_std=0.5)
     filt.correct(0.0, (0.0, 0.0), 0.0)
     t = 0.0
@@ -551,8 +551,8 @@ def test_through_the_flows_blend_over_a_fast_vehicle_the_accelerometer_keeps_the
     weight's model is wrong in the band by up to 0.8: 11 m/s of velocity error with the model alone. With the
     accelerometer carrying the velocity where the model is unsure, the error stays below 3 m/s (a third of the
     model's) and the published weight within 0.2 of the true one."""
-    from platform_tracking.flow_surface import FlowSurface
-    from platform_tracking.params import FlowSurfaceParams
+    from drone_estimator.flow_surface import FlowSurface
+    from drone_estimator.params import FlowSurfaceParams
     import yaml
     import os
     config = os.path.join(os.path.dirname(__file__), "..", "config", "flow_surface_car.yaml")
@@ -601,8 +601,8 @@ def test_lifting_off_a_fast_car_the_flow_is_known_to_see_the_pad_whatever_gps_sa
     1.5 s before it to 2 s after, while the car still speeds up (resting, the drone then moves at the car's reported
     velocity); going by the two GPS positions alone, the weight's model says the flow sees the road and the estimate
     falls metres behind."""
-    from platform_tracking.flow_surface import FlowSurface
-    from platform_tracking.params import FlowSurfaceParams
+    from drone_estimator.flow_surface import FlowSurface
+    from drone_estimator.params import FlowSurfaceParams
     import yaml
     import os
     config = os.path.join(os.path.dirname(__file__), "..", "config", "flow_surface_car.yaml")
@@ -658,8 +658,8 @@ def test_low_over_a_summit_speeding_up_the_weights_model_follows_the_cameras_las
     and the vehicle's report is 0.4 s late (harsh had both). Going by the estimate and the pad filter, which drift
     apart, the weight's model falls below 0.5 within 1.5 s and with it the velocity the estimate adds back; going by
     the last fixes carried on by the flow it stays above 0.9."""
-    from platform_tracking.flow_surface import FlowSurface
-    from platform_tracking.params import FlowSurfaceParams
+    from drone_estimator.flow_surface import FlowSurface
+    from drone_estimator.params import FlowSurfaceParams
     import yaml
     import os
     config = os.path.join(os.path.dirname(__file__), "..", "config", "flow_surface_summit_xl.yaml")
@@ -716,7 +716,7 @@ def test_low_over_a_summit_speeding_up_the_weights_model_follows_the_cameras_las
 
 
 def test_state_history_interpolates_inside_extrapolates_a_little_outside_and_restarts_when_time_goes_back():
-    from platform_tracking.estimator import StateHistory
+    from drone_estimator.estimator import StateHistory
     history = StateHistory(span=1.0, keep=2)
     assert history.at(0.0) is None
     for t in (0.0, 0.1, 0.2):

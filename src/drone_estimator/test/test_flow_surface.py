@@ -2,8 +2,8 @@
 
 import pytest
 
-from platform_tracking.flow_surface import FlowSurface, WeightForecast
-from platform_tracking.params import FlowSurfaceParams
+from drone_estimator.flow_surface import FlowSurface, WeightForecast
+from drone_estimator.params import FlowSurfaceParams
 
 LEVEL = (1.0, 0.0, 0.0, 0.0)
 

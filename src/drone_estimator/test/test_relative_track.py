@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from platform_tracking.relative import RelativeTrack
+from drone_estimator.relative import RelativeTrack
 
 
 def test_over_the_pad_the_flow_alone_carries_the_relative_position_whatever_the_vehicle_does():

@@ -34,7 +34,7 @@ class ManualJoystickTest(unittest.TestCase):
         cls.lock = threading.Lock()
         cls.navdata, cls.drone, cls.mode, cls.joy = None, None, None, None
         cls.vehicle_log = []  # (sim time, x, y)
-        rospy.Subscriber("/ardrone/navdata", Navdata, lambda m: setattr(cls, "navdata", m), queue_size=1)
+        rospy.Subscriber("/drone/navdata", Navdata, lambda m: setattr(cls, "navdata", m), queue_size=1)
         rospy.Subscriber("/groundtruth/ardrone", PoseStamped, lambda m: setattr(cls, "drone", m.pose.position),
                          queue_size=1)
         rospy.Subscriber("/groundtruth/summit", PoseStamped, cls._on_vehicle, queue_size=1)

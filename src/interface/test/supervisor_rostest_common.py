@@ -45,7 +45,7 @@ class Harness:
         sub("/emergency/position", PositionXYCommand, self._on_position, queue_size=20)
         sub("/platform_tracking/command", String, lambda m: self.tracker_commands.append(m.data), queue_size=10)
         sub("/ardrone/land", Empty, lambda _: self.land_times.append(rospy.get_time()), queue_size=10)
-        sub("/ardrone/navdata", Navdata, self._on_navdata, queue_size=10)
+        sub("/drone/navdata", Navdata, self._on_navdata, queue_size=10)
         sub("/groundtruth/ardrone", PoseStamped, lambda m: setattr(self, "truth", m.pose.position), queue_size=1)
         sub("/ardrone/touchdown", Touchdown, lambda m: setattr(self, "touchdown", m), queue_size=5)
         self.operator = rospy.Publisher("/operator/command", String, queue_size=10)
@@ -53,7 +53,7 @@ class Harness:
         self.tracker_pub = rospy.Publisher("/platform_tracking/cmd_vel", Twist, queue_size=1)
         threading.Thread(target=self._stand_in_tracker, daemon=True).start()
         self.wait_for(lambda: rospy.get_time() > 0.5 and self.mode is not None and self.navdata is not None,
-                      "the simulator clock, supervisor/mode and ardrone/navdata")
+                      "the simulator clock, supervisor/mode and drone/navdata")
         self.wait_for(lambda: self.operator.get_num_connections() >= 2, "supervisor and emergency on operator/command")
         # a take-off published before the simulator has connected would be lost
         self.wait_for(lambda: self.takeoff_pub.get_num_connections() >= 1, "the simulator on /ardrone/takeoff")

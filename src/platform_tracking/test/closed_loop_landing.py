@@ -20,13 +20,15 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(HERE, "..", "..")
-for _path in (os.path.join(HERE, "..", "src"), os.path.join(SRC, "mujoco_sim", "src"), os.path.join(SRC, "summit_moves", "src")):
+for _path in (os.path.join(HERE, "..", "src"), os.path.join(SRC, "drone_estimator", "src"), os.path.join(SRC, "mujoco_sim", "src"),
+              os.path.join(SRC, "summit_moves", "src")):
     if _path not in sys.path:
         sys.path.append(_path)
 
+from drone_estimator.estimator import DroneEstimator  # noqa: E402
+from drone_estimator.params import EstimatorParams  # noqa: E402
 from platform_tracking.controller import DroneState, PadPrediction  # noqa: E402
-from platform_tracking.estimator import DroneEstimator  # noqa: E402
-from platform_tracking.params import EstimatorParams, TrackingParams  # noqa: E402
+from platform_tracking.params import TrackingParams  # noqa: E402
 from platform_tracking.state_machine import Inputs, Nav, State, TrackingStateMachine  # noqa: E402
 
 SIM_PKG = os.path.join(SRC, "mujoco_sim")

@@ -39,7 +39,7 @@ class World:
         self.gps, self.nav_state, self.imu, self.detections = P1, Navdata.STATE_LANDED, True, False
         self.clock = rospy.Publisher("/clock", Clock, queue_size=10)
         self.pub_imu = rospy.Publisher("ardrone/imu", Imu, queue_size=10)
-        self.pub_nav = rospy.Publisher("ardrone/navdata", Navdata, queue_size=10)
+        self.pub_nav = rospy.Publisher("drone/navdata", Navdata, queue_size=10)
         self.pub_altimeter = rospy.Publisher("ardrone/altimeter", Altimeter, queue_size=10)
         self.pub_gps = rospy.Publisher("ardrone/gps/odom", Odometry, queue_size=10)
         self.pub_detection = rospy.Publisher("platform/current_platform_position_in_ardrone", PointStamped,

@@ -12,8 +12,9 @@ from nav_msgs.msg import Odometry, Path  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
 from landing_runtime.input_check import RosRejectionLog  # noqa: E402
+from landing_runtime.params import ParamError, load_params  # noqa: E402
 from platform_tracking import node  # noqa: E402
-from platform_tracking.params import ParamError, TrackingParams  # noqa: E402
+from platform_tracking.params import TrackingParams  # noqa: E402
 
 
 @pytest.fixture
@@ -37,14 +38,15 @@ def test_a_missing_parameter_is_named(fake_ros):
     import dataclasses
     fake_ros.params.update({f.name: f.default for f in dataclasses.fields(TrackingParams)})
     del fake_ros.params["lost_timeout"]
-    with pytest.raises(ParamError, match="required parameter 'lost_timeout' is missing"):
-        node.load_params(TrackingParams, check=True)
+    missing = r"required parameter 'lost_timeout' is missing .*\(see platform_tracking/config/\)"
+    with pytest.raises(ParamError, match=missing):
+        load_params(TrackingParams, check=True, see=node.CONFIG)
 
 
 def test_complete_parameters_load(fake_ros):
     import dataclasses
     fake_ros.params.update({f.name: f.default for f in dataclasses.fields(TrackingParams)})
-    assert node.load_params(TrackingParams, check=True) == TrackingParams()
+    assert load_params(TrackingParams, check=True, see=node.CONFIG) == TrackingParams()
 
 
 def bare_tracking_node():

@@ -102,7 +102,7 @@ class ConsoleNode:
         rospy.Subscriber("supervisor/warning", String, self._on_warning)
         rospy.Subscriber("emergency/position", PositionXYCommand,
                          lambda m: self._set(emergency_position=(m.x, m.y)))
-        rospy.Subscriber("ardrone/navdata", Navdata, self._on_navdata)
+        rospy.Subscriber("drone/navdata", Navdata, self._on_navdata)
         # One subscription per topic: rospy shares one per topic and process, and its first message class wins
         # (an AnyMsg one made first handed the height's callback undecoded messages). The sonar's own callback
         # also marks it seen.

@@ -90,8 +90,8 @@ class EmergencyNode:
             "ardrone/sonar_height", lambda m: _header_problem(m, BODY_FRAME) or (
                 ("out of range", "range is %s" % m.range) if not m.range >= 0.0 else None),  # +inf: no echo
             lambda m: self.core.on_sonar(rospy.get_time(), m.range)), queue_size=1)
-        self.handles.subscriber("ardrone/navdata", Navdata, checked(
-            "ardrone/navdata", lambda m: choice_problem(m.state, NAVDATA_STATES, "state") or _header_problem(m),
+        self.handles.subscriber("drone/navdata", Navdata, checked(
+            "drone/navdata", lambda m: choice_problem(m.state, NAVDATA_STATES, "state") or _header_problem(m),
             lambda m: self.core.on_flight(rospy.get_time(), flight_from_navdata(m.state))), queue_size=1)
 
     def _checked(self, topic, problem_of, callback):

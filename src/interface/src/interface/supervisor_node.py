@@ -3,7 +3,7 @@
 In:  the condition parameters (/wind_speed, /drone_battery, ... via rospy.get_param_cached, pushed by the
      master), sensor watchdogs (ardrone/bottom/camera_info, ardrone/imu, ardrone/gps/odom,
      ardrone/sonar_height), platform speed (kalman_platform_odom, else summit_xl/gps/odom), the
-     tracker's state (platform_tracking/state), the drone's state (ardrone/navdata), the pad seen by the
+     tracker's state (platform_tracking/state), the drone's state (drone/navdata), the pad seen by the
      camera (platform/current_platform_position_in_ardrone, to tell a touchdown on the pad), operator/command
      and the Trigger services supervisor/{landing,emergency,manual,continue}.
 Out: supervisor/decisions (JSON per decision), supervisor/mode, supervisor/warning, landing_allowed,
@@ -155,7 +155,7 @@ class SupervisorNode:
         subscriber("kalman_platform_odom", Odometry, self._on_platform_odom, queue_size=1)
         subscriber("summit_xl/gps/odom", Odometry, self._on_vehicle_gps, queue_size=5)
         subscriber("platform_tracking/state", String, self._on_tracker_state, queue_size=5)
-        subscriber("ardrone/navdata", Navdata, self._on_navdata, queue_size=1)
+        subscriber("drone/navdata", Navdata, self._on_navdata, queue_size=1)
         subscriber("platform/current_platform_position_in_ardrone", PointStamped, self._on_detection, queue_size=5)
         subscriber("operator/command", String, self._on_operator, queue_size=10, commands=True)
         for name in SERVICES:
@@ -284,7 +284,7 @@ class SupervisorNode:
         problem = choice_problem(msg.state, NAVDATA_STATES, "state") or \
             stamp_problem(msg.header.stamp.to_sec(), rospy.get_time())
         if problem:
-            return self._dropped("ardrone/navdata", problem)
+            return self._dropped("drone/navdata", problem)
         self.navdata = (rospy.get_time(), msg.state)
 
     def _on_operator(self, msg):

@@ -1,6 +1,6 @@
 // Everything prediction_kalman_node reads from its parameters (config/kalman.yaml and the topic names of
-// launch/kalman_pred.launch), and their validation. ROS-free: the node fills it from the parameter server at
-// start-up and at each ~reset, the same way, and builds its filter from it.
+// launch/prediction_kalman_node.launch), and their validation. ROS-free: the node fills it from the parameter
+// server at start-up and at each ~reset, the same way, and builds its filter from it.
 #pragma once
 
 #include "ped_traj_pred/pad_motion_filter.h"

@@ -8,7 +8,7 @@ The velocity command is built in ``world`` and rotated into the *heading frame* 
     v_ff  = v_pad(t + T_v + w T_f) - w v_pad(t)
 
 - ``w``: how much the drone's own velocity follows the vehicle under it (its firmware's optical flow over
-  the vehicle, flow_surface.py; 0 in the ideal world). The drone flies its command plus w times the
+  the vehicle, drone_estimator.flow_surface; 0 in the ideal world). The drone flies its command plus w times the
   vehicle's velocity (as its firmware's flow blended it in, over ``T_f``, flow_time_lead): at w = 1 the
   command is relative to the pad. The feed-forward then keeps only its lead, the change of the pad's
   velocity over T_v + T_f (the drone's velocity loop lags a ramp as much relative to the pad as over the
@@ -39,9 +39,9 @@ import dataclasses
 from typing import Optional, Sequence
 
 import numpy as np
+from drone_estimator.estimator import world_to_heading
 from landing_runtime.geometry import yaw_from_quaternion
 
-from .estimator import world_to_heading
 from .params import TrackingParams
 
 
@@ -109,8 +109,8 @@ class PadPrediction:
 
     def moved_to(self, t, position_xy, velocity_xy):
         """The prediction moved so that at ``t`` the pad is at ``position_xy`` moving at ``velocity_xy`` (world)
-        [m, m/s]; before and after it changes as predicted (a relative track of the pad, relative.py, placing it
-        where the world-frame prediction has drifted from)."""
+        [m, m/s]; before and after it changes as predicted (a relative track of the pad, drone_estimator.relative,
+        placing it where the world-frame prediction has drifted from)."""
         shift = np.asarray(position_xy, dtype=float) - self.position_at(t)[:2]
         now_velocity = self.path_velocity_at(t)
         drift = np.asarray(velocity_xy, dtype=float) - (self.velocity if now_velocity is None else now_velocity)[:2]

@@ -1,18 +1,10 @@
-"""The two thin ROS nodes of this package; all logic lives in estimator.py and state_machine.py.
+"""The tracker's thin ROS node; all logic lives in state_machine.py and controller.py (ROS-free). The drone's own
+estimate (ardrone/odom_estimate, ardrone/flow_unseen_velocity) comes from the package drone_estimator.
 
-drone_estimator  ardrone/imu, ardrone/navdata, ardrone/gps/odom, ardrone/altimeter, ardrone/sonar_height
-                 (and, with ~flow_surface/enabled, kalman_platform_odom, vehicle/gps/odom and
-                 platform/current_platform_position_in_world: where the flow sees the vehicle)
-                 -> ardrone/odom_estimate (nav_msgs/Odometry in `world`, child ardrone/base_link, at the
-                 IMU rate; twist.linear is the WORLD-frame velocity, as on ardrone/gps/odom and the
-                 ground truth; twist.angular the body rates from the IMU), and ardrone/flow_unseen_velocity
-                 (geometry_msgs/Vector3Stamped, world: the vehicle's velocity the flow does not see, at
-                 the navdata rate; flow_surface.py).
-
-platform_tracking ardrone/odom_estimate, kalman_prediction_path, kalman_platform_odom, ardrone/navdata,
+platform_tracking ardrone/odom_estimate, kalman_prediction_path, kalman_platform_odom, drone/navdata,
                  ardrone/sonar_height, ardrone/flow_unseen_velocity, platform/current_platform_position_in_ardrone
                  (only when it arrives: the pad was seen) and ..._in_world (the pad relative to the drone, carried on
-                 by the flow: relative.py), landing_allowed (std_msgs/Bool, default true) and the
+                 by the flow: drone_estimator.relative), landing_allowed (std_msgs/Bool, default true) and the
                  operator requests -> ardrone/cmd_vel at rate_hz (sim time), ardrone/takeoff and
                  ardrone/land as one-shot actions, platform_tracking/state (std_msgs/String, latched,
                  on every change), platform_tracking/target (geometry_msgs/PointStamped, world: where the
@@ -28,12 +20,12 @@ ardrone/takeoff and ardrone/land: an operator's ardrone/land makes it descend at
 tracker then follows the pad down (state LANDING, committed) rather than starting its own approach;
 use platform_tracking/command "land" for the gated landing on the pad.
 
-Restart and reset: respawned after a crash, the estimator starts again from the next GPS fix and the tracker from
-the latched platform_tracking/command and the drone's navdata state (nothing else is kept). Both offer ``~reset``
-(std_srvs/Trigger, landing_runtime.rospy_node.ResettableNode) for the next scenario of a warm graph: the parameters are
-read again as at start-up (a bad one refuses the reset, naming it; the node goes on as it was) and the node starts
-over as a fresh one: the estimator without a fix, the tracker LANDED with no request pending (``autostart`` takes
-off again), its latched platform_tracking/state LANDED again and no camera_latency latched until it measures one.
+Restart and reset: respawned after a crash, the tracker starts again from the latched platform_tracking/command and
+the drone's navdata state (nothing else is kept). It offers ``~reset`` (std_srvs/Trigger,
+landing_runtime.rospy_node.ResettableNode) for the next scenario of a warm graph: the parameters are read again as
+at start-up (a bad one refuses the reset, naming it; the node goes on as it was) and the node starts over as a
+fresh one: LANDED with no request pending (``autostart`` takes off again), its latched platform_tracking/state
+LANDED again and no camera_latency latched until it measures one.
 
 Inputs that are garbage (non-finite or implausible values, stamps from another time, frames of another tree,
 unknown words) are dropped with a warning naming the topic and what was wrong, once per topic and kind of
@@ -46,31 +38,32 @@ import threading
 
 import numpy as np
 import rospy
+from drone_estimator.estimator import StateHistory
+from drone_estimator.flow_surface import WeightForecast
+from drone_estimator.pad_inputs import ESTIMATE_EXTRAPOLATION, ESTIMATE_HISTORY, pad_odometry, world_fix
+from drone_estimator.relative import RelativeTrack
 from geometry_msgs.msg import PointStamped, Twist, Vector3Stamped
-from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
-                                      first_problem, frame_problem, numbers_problem, stamp_problem)
+from landing_msgs.msg import Navdata
+from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog,
+                                         choice_problem, numbers_problem, stamp_problem)
 from landing_runtime.lockstep import LockstepAcker
-from landing_msgs.msg import Altimeter, Navdata
+from landing_runtime.message_check import WORLD_FRAME, header_problem, odometry_problem, sonar_problem, stamp_of
+from landing_runtime.params import ParamError, load_params
 from landing_runtime.rospy_node import NodeHandles, direct_publisher, run_node
 from nav_msgs.msg import Odometry, Path
-from sensor_msgs.msg import Imu, Range
+from sensor_msgs.msg import Range
 from std_msgs.msg import Bool, Empty, Float64, String
 
 from .camera_latency import CameraLatency
 from .controller import DroneState, PadPrediction
-from .estimator import DroneEstimator, StateHistory
-from .flow_surface import FlowSurface, WeightForecast
-from .relative import RelativeTrack
-from .params import EstimatorParams, FlowSurfaceParams, ParamError, TrackingParams, from_mapping
-from .state_machine import AIRBORNE_NAV, Inputs, State, TrackingStateMachine
+from .params import TrackingParams
+from .state_machine import Inputs, State, TrackingStateMachine
 
 WARN_PERIOD = 5.0          # throttle of repeated input warnings [s]
+CONFIG = "platform_tracking/config/"  # where the shipped parameter file is, for the messages naming a bad one
 ESTIMATE_MAX_AGE = 0.5     # an odom_estimate older than this counts as no estimate [s]
-ESTIMATE_HISTORY = 2.0     # how far back the estimate is kept, to place a fix at its image's capture time [s]
-ESTIMATE_EXTRAPOLATION = 0.1  # a fix this far outside that history is placed with its nearest estimate [s]
 DELAY_SAMPLES = 15         # detections whose arrival-minus-capture median is the camera latency [-]
 LATENCY_PERIOD = 1.0       # how often that latency is published on platform_tracking/camera_latency [s of sim time]
-WORLD_FRAMES = ("world", "/world", "")
 COMMANDS = ("takeoff", "land", "force_land", "hold")
 BODY_FRAME = "ardrone/base_link"  # the drone's body frame (docs/conventions.md): sonar and relative pad positions
 
@@ -78,247 +71,6 @@ BODY_FRAME = "ardrone/base_link"  # the drone's body frame (docs/conventions.md)
 NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes (state_machine.Nav)
 
 
-def finite(*values):
-    return all(math.isfinite(v) for v in values)
-
-
-def header_problem(msg, frames=None):
-    """A stamp too far from the clock, or (``frames``: the names allowed) a frame of another tree."""
-    return first_problem(stamp_problem(msg.header.stamp.to_sec(), rospy.get_time()),
-                         frame_problem(msg.header.frame_id, frames) if frames else None)
-
-
-def odometry_problem(msg, frames=WORLD_FRAMES[:1], position_limit=MAX_POSITION_M):
-    """What is wrong with an Odometry in the world: stamp, frame, a position or velocity no vehicle has."""
-    p, v = msg.pose.pose.position, msg.twist.twist.linear
-    return header_problem(msg, frames) or numbers_problem(position_limit, position=(p.x, p.y, p.z)) or \
-        numbers_problem(MAX_SPEED_MPS, velocity=(v.x, v.y, v.z))
-
-
-def load_params(cls, check=None, namespace="~", exclude=()):
-    """The node's private parameters (or those of a sub-namespace) as ``cls``; a missing or bad one raises a
-    ParamError naming it (fatal at start-up, a refused ~reset later: run_node). Sub-namespaces in ``exclude`` are
-    another class's."""
-    source = "%s parameters" % rospy.resolve_name(namespace)
-    try:
-        mapping = rospy.get_param(namespace, {})
-        if isinstance(mapping, dict):
-            mapping = {k: v for k, v in mapping.items() if k not in exclude}
-        params = from_mapping(cls, mapping, source)
-        return params.check(source) if check else params
-    except ParamError as err:
-        raise ParamError("%s (see platform_tracking/config/)" % err) from None
-
-
-def sonar_problem(msg, base_frame):
-    """A range that is NaN or negative (+inf is valid: no echo), a stamp from another time or a frame not the
-    drone's body."""
-    if math.isnan(msg.range) or msg.range < 0.0:
-        return ("non-finite" if math.isnan(msg.range) else "out of range"), "range is %s" % msg.range
-    return header_problem(msg, (base_frame,))
-
-
-def stamp_of(msg):
-    """Header stamp in seconds, the current time when the publisher left it empty."""
-    stamp = msg.header.stamp.to_sec()
-    return stamp if stamp > 0.0 else rospy.get_time()
-
-
-def pad_odometry(msg, rejections):
-    """(stamp, position, velocity) of the Kalman filter's pad odometry, or None after logging why it was dropped."""
-    problem = odometry_problem(msg)
-    if problem:
-        rejections.reject("kalman_platform_odom", problem)
-        return None
-    p, v = msg.pose.pose.position, msg.twist.twist.linear
-    return stamp_of(msg), (p.x, p.y, p.z), (v.x, v.y, v.z)
-
-
-def world_fix(msg, rejections):
-    """(stamp, world xy) of the camera's fix of the pad (platform/current_platform_position_in_world), or None after
-    logging why it was dropped."""
-    p = msg.point
-    problem = numbers_problem(MAX_POSITION_M, point=(p.x, p.y, p.z)) or header_problem(msg, WORLD_FRAMES[:1])
-    if problem:
-        return rejections.reject("platform/current_platform_position_in_world", problem)
-    return stamp_of(msg), np.array([p.x, p.y])
-
-
-# ------------------------------------------------------------------------------------------------
-def load_flow_surface():
-    """The drone's flow model over the vehicle, from ~flow_surface (config/flow_surface_<vehicle>.yaml)."""
-    return FlowSurface(load_params(FlowSurfaceParams, check=True, namespace="~flow_surface"))
-
-
-class EstimatorNode:
-    """drone_estimator, driven by its callbacks alone; a ~reset replaces it with a new one (ResettableNode)."""
-
-    def __init__(self):
-        self.params = load_params(EstimatorParams, exclude=("flow_surface",))
-        self.surface = load_flow_surface()
-        self.handles = NodeHandles()  # its subscribers, let go of at a reset
-        self.lock = threading.Lock()
-        self.estimator = self._new_estimator()
-        self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
-        self.clock = 0.0  # the latest clock seen by _at
-        self.publisher = direct_publisher("ardrone/odom_estimate", Odometry)
-        self.pub_unseen = direct_publisher("ardrone/flow_unseen_velocity", Vector3Stamped)
-        self.lockstep = LockstepAcker("ardrone/imu")
-        # tcp_nodelay throughout the control loop: Nagle's algorithm would deliver sensor messages in bursts.
-        self.handles.subscriber("ardrone/imu", Imu, self.on_imu, queue_size=20, tcp_nodelay=True)
-        self.handles.subscriber("ardrone/navdata", Navdata, self.on_navdata, queue_size=20, tcp_nodelay=True)
-        self.handles.subscriber("ardrone/gps/odom", Odometry, self.on_gps, queue_size=5, tcp_nodelay=True)
-        self.handles.subscriber("ardrone/altimeter", Altimeter, self.on_altimeter, queue_size=5, tcp_nodelay=True)
-        self.handles.subscriber("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
-        self.published = StateHistory(ESTIMATE_HISTORY, keep=2)  # odom_estimate's xy, to take it off the fixes
-        if self.surface.enabled:
-            self.handles.subscriber("kalman_platform_odom", Odometry, self.on_pad, queue_size=5, tcp_nodelay=True)
-            self.handles.subscriber("vehicle/gps/odom", Odometry, self.on_vehicle, queue_size=5, tcp_nodelay=True)
-            self.handles.subscriber("platform/current_platform_position_in_world", PointStamped, self.on_world_fix,
-                                    queue_size=5, tcp_nodelay=True)
-
-    def _new_estimator(self):
-        return DroneEstimator(self.params, log=lambda line: rospy.loginfo("drone_estimator: %s", line),
-                              surface=self.surface)
-
-    def on_pad(self, msg):
-        pad = pad_odometry(msg, self.rejections)
-        if pad:
-            with self.lock:
-                self.estimator.pad(*pad)
-
-    def on_world_fix(self, msg):
-        """The camera's fix of the pad, placed in the world with the published estimate at its image's capture time:
-        less that estimate, the pad relative to the drone then."""
-        fix = world_fix(msg, self.rejections)
-        if fix:
-            with self.lock:
-                drone = self.published.at(fix[0], max_extrapolation=ESTIMATE_EXTRAPOLATION)
-                if drone is not None:
-                    self.estimator.pad_fix(fix[0], fix[1] - drone[0])
-
-    def on_vehicle(self, msg):
-        v, w = msg.twist.twist.linear, msg.twist.twist.angular.z
-        if not finite(v.x, v.y) or not msg.twist.covariance[0] > 0.0:
-            return self.rejections.reject("vehicle/gps/odom", ("non-finite" if not finite(v.x, v.y) else "malformed",
-                                                               "no finite velocity with a variance"))
-        problem = header_problem(msg, WORLD_FRAMES[:1]) or numbers_problem(MAX_SPEED_MPS, velocity=(v.x, v.y))
-        if problem:
-            return self.rejections.reject("vehicle/gps/odom", problem)
-        with self.lock:
-            self.estimator.vehicle(stamp_of(msg), (v.x, v.y), w if math.isfinite(w) else 0.0)
-
-    def _at(self, t):
-        """Called with the lock held before using a measurement stamped ``t``: restarts the filter when the
-        clock jumped back (a new simulation, a bag loop). The clock, not the stamp: a message stamped from
-        another time is garbage (dropped by the callbacks), not a reason to forget the estimate."""
-        now = rospy.get_time()
-        if now < self.clock - 1.0 and self.estimator.time is not None:
-            rospy.logwarn("drone_estimator: time jumped back from %.2f to %.2f s; restarting the estimate",
-                          self.clock, now)
-            self.estimator = self._new_estimator()
-        self.clock = now
-
-    def on_imu(self, msg):
-        q = msg.orientation
-        if not finite(q.w, q.x, q.y, q.z):
-            return self.rejections.reject("ardrone/imu", ("non-finite", "non-finite orientation"))
-        problem = header_problem(msg, (self.params.child_frame_id,))
-        if problem:
-            return self.rejections.reject("ardrone/imu", problem)
-        t = stamp_of(msg)
-        with self.lock:
-            self._at(t)
-            a = msg.linear_acceleration
-            if not self.estimator.imu(t, (q.w, q.x, q.y, q.z), (a.x, a.y, a.z)):
-                return self.rejections.reject("ardrone/imu", ("non-finite", "orientation is not a unit quaternion"))
-            estimate = self.estimator.estimate(t)
-        if estimate is not None:
-            self.publish(msg, estimate)
-        self.lockstep.ack(msg.header.stamp)
-
-    def on_navdata(self, msg):
-        problem = numbers_problem(MAX_SPEED_MPS, velocity=(msg.vx, msg.vy, msg.vz)) or header_problem(msg)
-        if problem:
-            return self.rejections.reject("ardrone/navdata", problem)
-        t = stamp_of(msg)
-        with self.lock:
-            self._at(t)
-            self.estimator.flow(t, msg.vx, msg.vy, msg.vz, airborne=msg.state in AIRBORNE_NAV)
-            unseen, weight = self.estimator.unseen_velocity[1], self.estimator.flow_weight
-        if self.surface.enabled:
-            correction = Vector3Stamped()
-            correction.header.stamp, correction.header.frame_id = msg.header.stamp, self.params.frame_id
-            correction.vector.x, correction.vector.y = float(unseen[0]), float(unseen[1])
-            correction.vector.z = float(weight)  # the weight itself: 0 the flow sees the ground, 1 the vehicle
-            self.pub_unseen.publish(correction)
-
-    def on_gps(self, msg):
-        p, v = msg.pose.pose.position, msg.twist.twist.linear
-        if not finite(p.x, p.y, p.z):
-            return self.rejections.reject("ardrone/gps/odom", ("non-finite", "non-finite position"))
-        problem = header_problem(msg, WORLD_FRAMES[:1]) or numbers_problem(MAX_POSITION_M, position=(p.x, p.y, p.z))
-        if problem:
-            return self.rejections.reject("ardrone/gps/odom", problem)
-        # A fix without a velocity (NaN) is still a fix; an implausible velocity makes the whole fix suspect.
-        velocity = (v.x, v.y, v.z) if finite(v.x, v.y, v.z) else None
-        if velocity is not None and numbers_problem(MAX_SPEED_MPS, velocity=velocity):
-            return self.rejections.reject("ardrone/gps/odom", numbers_problem(MAX_SPEED_MPS, velocity=velocity))
-        t = stamp_of(msg)
-        with self.lock:
-            self._at(t)
-            self.estimator.gps(t, (p.x, p.y, p.z), velocity)
-
-    def on_altimeter(self, msg):
-        problem = numbers_problem(MAX_ALTITUDE_M, altitude=msg.altitude) or header_problem(msg)
-        if problem:
-            return self.rejections.reject("ardrone/altimeter", problem)
-        t = stamp_of(msg)
-        with self.lock:
-            self._at(t)
-            self.estimator.altimeter(t, msg.altitude)
-
-    def on_sonar(self, msg):
-        problem = sonar_problem(msg, self.params.child_frame_id)
-        if problem:
-            return self.rejections.reject("ardrone/sonar_height", problem)
-        t = stamp_of(msg)
-        with self.lock:
-            self._at(t)
-            self.estimator.sonar(t, msg.range)  # +inf (no echo) is valid and simply unused
-
-    def publish(self, imu, estimate):
-        odom = Odometry()
-        odom.header.stamp = rospy.Time.from_sec(estimate.time)
-        odom.header.frame_id = self.params.frame_id
-        odom.child_frame_id = self.params.child_frame_id
-        position = odom.pose.pose.position
-        position.x, position.y, position.z = (float(v) for v in estimate.position)
-        orientation = odom.pose.pose.orientation
-        orientation.w, orientation.x, orientation.y, orientation.z = estimate.orientation
-        velocity = odom.twist.twist.linear
-        velocity.x, velocity.y, velocity.z = (float(v) for v in estimate.velocity)
-        odom.twist.twist.angular = imu.angular_velocity
-        covariance = [0.0] * 36
-        for i, variance in enumerate(estimate.position_variance):
-            covariance[i * 7] = float(variance)
-        for i in range(3, 6):
-            covariance[i * 7] = max(imu.orientation_covariance[0], 1e-6)
-        odom.pose.covariance = covariance
-        velocity_variance = self.params.flow_velocity_std ** 2
-        odom.twist.covariance = [velocity_variance if i in (0, 7, 14) else 0.0 for i in range(36)]
-        self.publisher.publish(odom)
-        if self.surface.enabled:  # only the flow over the vehicle needs the fixes taken back to the drone
-            with self.lock:
-                self.published.add(estimate.time, np.array(estimate.position[:2], dtype=float),
-                                   np.array(estimate.velocity[:2], dtype=float))
-
-
-def estimator_main():
-    return run_node("drone_estimator", EstimatorNode, startup_errors=(ParamError,), resettable=True)
-
-
-# ------------------------------------------------------------------------------------------------
 def build_prediction(path, odom):
     """PadPrediction from the latest kalman_prediction_path ``(times, positions)`` and
     kalman_platform_odom ``(stamp, position, velocity)``: the path gives the positions and the odom
@@ -343,7 +95,7 @@ class TrackingNode:
     replaces the object at a ~reset); the callbacks only store their inputs."""
 
     def __init__(self):
-        self.params = load_params(TrackingParams, check=True)
+        self.params = load_params(TrackingParams, check=True, see=CONFIG)
         self.rate_hz = self.params.rate_hz
         self.lock = threading.Lock()
         self.rejections = RosRejectionLog(WARN_PERIOD)  # garbage: what was wrong, once per topic and kind
@@ -386,7 +138,7 @@ class TrackingNode:
         subscribe("ardrone/odom_estimate", Odometry, self.on_estimate, queue_size=5, tcp_nodelay=True)
         subscribe("kalman_prediction_path", Path, self.on_path, queue_size=5, tcp_nodelay=True)
         subscribe("kalman_platform_odom", Odometry, self.on_pad_odom, queue_size=5, tcp_nodelay=True)
-        subscribe("ardrone/navdata", Navdata, self.on_navdata, queue_size=5, tcp_nodelay=True)
+        subscribe("drone/navdata", Navdata, self.on_navdata, queue_size=5, tcp_nodelay=True)
         subscribe("ardrone/flow_unseen_velocity", Vector3Stamped, self.on_unseen, queue_size=5, tcp_nodelay=True)
         subscribe("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
         subscribe("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
@@ -421,7 +173,7 @@ class TrackingNode:
 
     def on_unseen(self, msg):
         problem = numbers_problem(MAX_SPEED_MPS, vector=(msg.vector.x, msg.vector.y)) or \
-            header_problem(msg, WORLD_FRAMES[:1])
+            header_problem(msg, (WORLD_FRAME,))
         if problem:
             return self.rejections.reject("ardrone/flow_unseen_velocity", problem)
         with self.lock:
@@ -441,7 +193,7 @@ class TrackingNode:
 
     def on_world_fix(self, msg):
         """The camera's fix of the pad in the world, placed with the drone's estimate at the image's capture time:
-        less that estimate, the pad relative to the drone then (relative.py)."""
+        less that estimate, the pad relative to the drone then (drone_estimator.relative)."""
         fix = world_fix(msg, self.rejections)
         if fix:
             with self.lock:
@@ -450,7 +202,7 @@ class TrackingNode:
                     self.relative.add_fix(fix[0], fix[1] - drone[0])
 
     def on_path(self, msg):
-        problem = header_problem(msg, WORLD_FRAMES[:1])
+        problem = header_problem(msg, (WORLD_FRAME,))
         if problem:
             return self.rejections.reject("kalman_prediction_path", problem)
         if not msg.poses:
@@ -485,7 +237,7 @@ class TrackingNode:
     def on_navdata(self, msg):
         problem = choice_problem(msg.state, NAVDATA_STATES, "state") or header_problem(msg)
         if problem:
-            return self.rejections.reject("ardrone/navdata", problem)
+            return self.rejections.reject("drone/navdata", problem)
         with self.lock:
             self.navdata_state = int(msg.state)
 

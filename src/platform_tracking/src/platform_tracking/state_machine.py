@@ -83,10 +83,12 @@ class Inputs:
     landing_allowed: bool = True
     vision_age: Optional[float] = None      # time since the latest pad detection arrived [s]; None: never
     flow_weight: float = 0.0                # how much the drone's own velocity follows the vehicle under it (0 the
-                                            # ground .. 1 the vehicle; ardrone/flow_unseen_velocity, flow_surface.py)
+                                            # ground .. 1 the vehicle; ardrone/flow_unseen_velocity,
+                                            # drone_estimator.flow_surface)
     camera_latency: float = 0.0             # how late the pad's detections arrive after their image [s]
     relative: Optional[tuple] = None        # (position, rate) of the pad relative to the drone (world x, y) carried
-                                            # by the flow since the latest fix (relative.py) [m, m/s]; None: none
+                                            # by the flow since the latest fix (drone_estimator.relative)
+                                            # [m, m/s]; None: none
 
 
 @dataclasses.dataclass
