@@ -14,7 +14,7 @@ import pytest
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "src", "landing_eval", "src"))
 from landing_eval.ray_local import RayNode  # noqa: E402
-from landing_msgs.testing import wait_for  # noqa: E402
+from landing_runtime.testing import wait_for  # noqa: E402
 
 SWEEP_TIMEOUT_S = 600  # one sweep of the three scenarios; about 30-60 s on a loaded 2-core machine
 WAIT_S = 300           # for a condition inside a sweep (a row, a flight under way, processes gone)

@@ -52,7 +52,7 @@ def test_short_benchmark_run_scores_the_good_scenario_and_marks_the_bad_one(tmp_
     bags = [run_dir / name for name in os.listdir(run_dir) if name.endswith(".bag")]
     assert len(bags) == 1
     # The bag holds the flight from its first sim-second (its connections once came up seconds late).
-    first = first_recorded(bags[0], {"/groundtruth/ardrone", "/ardrone/navdata", "/ardrone/odom_estimate", "/tf"})
+    first = first_recorded(bags[0], {"/groundtruth/ardrone", "/drone/navdata", "/ardrone/odom_estimate", "/tf"})
     assert len(first) == 4 and max(first.values()) < 0.5, first
 
 

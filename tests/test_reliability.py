@@ -13,11 +13,11 @@ import pytest
 import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "src", "landing_eval", "src"))
+sys.path[:0] = [os.path.join(ROOT, "src", "landing_eval", "src"), os.path.join(ROOT, "src", "flight_analysis", "src")]
+from flight_analysis.analysis_bag import read_bag  # noqa: E402
 from landing_eval import processes  # noqa: E402
 from landing_eval.isolated_ros import IsolatedCore, IsolatedLaunch, IsolatedProcess  # noqa: E402
 from landing_eval.runner import RECORDER, recorder_command  # noqa: E402
-from landing_eval.analysis_bag import read_bag  # noqa: E402
 
 RELIABILITY = os.path.join(ROOT, "scenarios", "reliability")
 SAFE = ("landed_on_pad", "emergency_landed", "timeout")  # on the pad, an emergency landing, or still flying
@@ -61,7 +61,7 @@ def test_three_missions_in_a_row_land_on_the_pad_with_flat_memory_and_loopback_o
     # The bags follow one another without a gap and hold the whole session.
     bags = result["bags"]
     assert [os.path.basename(b) for b in bags] == ["flight_%d.bag" % i for i in range(len(bags))] and len(bags) >= 3
-    parts = [read_bag(bag, ["/ardrone/navdata"]) for bag in bags]
+    parts = [read_bag(bag, ["/drone/navdata"]) for bag in bags]
     # (a bag's times are receive times in float seconds: at the split the next may start a nanosecond earlier)
     assert all(-0.01 < later.start_s - earlier.end_s < 0.5 for earlier, later in zip(parts, parts[1:])), \
         [(p.start_s, p.end_s) for p in parts]
@@ -172,7 +172,7 @@ def test_nodes_killed_mid_flight_come_back_and_the_drone_lands_on_the_pad(tmp_pa
     assert result["callback_errors"] == {}, result["callback_errors"]  # the others took the restarts in their stride
     # The killed recorder's bag was reindexed and a new one records the rest: both read, together the whole flight.
     assert [os.path.basename(b) for b in result["bags"]] == ["flight.bag", "flight.2.bag"]
-    first, second = read_bag(result["bags"][0], ["/ardrone/navdata"]), read_bag(result["bags"][1], ["/ardrone/navdata"])
+    first, second = read_bag(result["bags"][0], ["/drone/navdata"]), read_bag(result["bags"][1], ["/drone/navdata"])
     assert first.end_s >= 9.0 and second.start_s - first.end_s < 5.0 and second.end_s >= result["sim_time_s"] - 2.0
 
 
@@ -184,7 +184,7 @@ def test_a_dead_simulator_ends_the_run_at_once_with_the_reason_and_a_readable_ba
     result = json.loads((out / "fault_simulator_killed" / "result.json").read_text())
     assert result["outcome"] == "aborted" and "required node mujoco_sim died" in result["error"]
     assert result["sim_time_s"] < 14.0 and result["wall_phases_s"]["shut_down"] < result["wall_limits_s"]["shut_down"]
-    assert read_bag(result["bag"], ["/ardrone/navdata"]).end_s >= 11.0
+    assert read_bag(result["bag"], ["/drone/navdata"]).end_s >= 11.0
 
 
 def test_a_run_killed_with_sigkill_leaves_a_bag_the_analysis_reads_to_the_last_second(tmp_path):
@@ -221,7 +221,7 @@ def test_a_run_killed_with_sigkill_leaves_a_bag_the_analysis_reads_to_the_last_s
             runner.kill()
         runner.wait()
     assert not (out / "result.json").exists() and (out / "flight.bag.active").is_file()
-    contents = read_bag(str(out / "flight.bag.active"), ["/ardrone/navdata", "/groundtruth/ardrone"])
+    contents = read_bag(str(out / "flight.bag.active"), ["/drone/navdata", "/groundtruth/ardrone"])
     assert contents.integrity["status"] == "recovered"
     assert contents.end_s >= t - 1.0, (contents.end_s, t)  # up to the last second before the kill
     analysis = subprocess.run([sys.executable, "-m", "landing_eval.analyze", str(out / "flight.bag.active"), "--out",

@@ -85,7 +85,7 @@ def test_a_reset_graph_flies_the_suite_as_fresh_graphs_do(tmp_path):
 
     # Each run has a bag of its own that holds its flight from its first sim-second, and the faster vehicle's.
     bag = pathlib.Path(warm["4_faster"]["bag"])
-    first = first_recorded(bag, {"/groundtruth/ardrone", "/ardrone/navdata", "/ardrone/odom_estimate", "/tf",
+    first = first_recorded(bag, {"/groundtruth/ardrone", "/drone/navdata", "/ardrone/odom_estimate", "/tf",
                                  "/groundtruth/landing_pad"})
     assert len(first) == 5 and max(first.values()) - min(first.values()) < 0.5, first
     assert _pad_speed(bag) > 1.6 and _pad_speed(pathlib.Path(warm["1_circle"]["bag"])) < 1.3

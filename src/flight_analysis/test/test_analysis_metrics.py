@@ -1,4 +1,4 @@
-"""Flight-analysis metrics (landing_eval.analysis_metrics), ROS-free, with answers worked out by hand."""
+"""Flight-analysis metrics (flight_analysis.analysis_metrics), ROS-free, with answers worked out by hand."""
 import json
 import math
 import os
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from landing_eval import analysis_metrics as M  # noqa: E402
+from flight_analysis import analysis_metrics as M  # noqa: E402
 
 
 def line(t, x0=0.0, vx=0.0, y=0.0, z=0.0):

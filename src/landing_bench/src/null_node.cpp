@@ -1,9 +1,9 @@
-// A null node of the graph floor (landing_eval.graph_floor), roscpp: the transport of one roscpp node of the
-// landing graph without its work. Reads ~null_spec (see landing_eval/null_node.py, its rospy twin), subscribes to
+// A null node of the graph floor (landing_bench.graph_floor), roscpp: the transport of one roscpp node of the
+// landing graph without its work. Reads ~null_spec (see landing_bench/null_node.py, its rospy twin), subscribes to
 // every topic without deserialising (topic_tools::ShapeShifter), publishes the default message of each publication
 // at its rate on the events of its driver (a timer, or an input: graph_floor.NodeShape.driver), and acknowledges
 // what the real node acknowledges.
-#include <landing_eval/null_node_core.h>
+#include <landing_bench/null_node_core.h>
 #include <landing_runtime/lockstep_acker.h>
 #include <ros/ros.h>
 #include <topic_tools/shape_shifter.h>
@@ -44,7 +44,7 @@ struct Publication {
   Publication(double rate_hz, double driver_hz) : credit(rate_hz, driver_hz) {}
   ros::Publisher publisher;
   topic_tools::ShapeShifter message;
-  landing_eval::PublicationCredit credit;
+  landing_bench::PublicationCredit credit;
 };
 
 class NullNode {
@@ -96,7 +96,7 @@ class NullNode {
       std::vector<uint8_t> bytes(msg.size());
       ros::serialization::OStream stream(bytes.data(), static_cast<uint32_t>(bytes.size()));
       msg.write(stream);
-      if (auto stamp = landing_eval::headerStamp(bytes.data(), bytes.size()))
+      if (auto stamp = landing_bench::headerStamp(bytes.data(), bytes.size()))
         acker->second->ack(ros::Time(stamp->first, stamp->second));
     }
     if (topic == driver_) publishDue();  // ("" for a timer: no topic)
@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
   ros::NodeHandle nh, private_nh("~");
   XmlRpc::XmlRpcValue spec;
   if (!private_nh.getParam("null_spec", spec) || spec.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
-    ROS_FATAL("%s: required parameter ~null_spec (set by landing_eval.graph_floor) is missing",
+    ROS_FATAL("%s: required parameter ~null_spec (set by landing_bench.graph_floor) is missing",
               ros::this_node::getName().c_str());
     return 2;
   }

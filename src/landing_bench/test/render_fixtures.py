@@ -1,18 +1,24 @@
 #!/usr/bin/env python3
-"""Renders the bottom-camera fixtures of the detector gtests with mujoco_sim's ROS-free core.
+"""Renders the bottom-camera fixtures of uav_vision's detector gtests with mujoco_sim's ROS-free core.
+
+The fixtures are committed in uav_vision (src/uav_vision/test/data), whose gtests (rendered_fixtures_test.cpp,
+realistic_fixtures_test.cpp) only read them, through include/uav_vision/rendered_frames.h: the generator lives
+here, in landing_bench, because rendering needs the simulator and uav_vision does not depend on it.
 
 Two sets, each a directory of PNGs (RGB images saved as ordinary PNGs) and a truth.csv (columns:
-uav_vision.rendered_frames.TRUTH_COLUMNS) with, per image, the ground truth and what the drone's own
+landing_bench.rendered_frames.TRUTH_COLUMNS, read by name by uav_vision's loadRenderedFrames) with, per image, the ground truth and what the drone's own
 sensors would read there:
-- ``ideal`` (test/data/rendered): the first fixtures, pinned to the ``ideal`` realism profile (perfect
+- ``ideal`` (src/uav_vision/test/data/rendered): the first fixtures, pinned to the ``ideal`` realism profile (perfect
   lens, even light, no blur or noise), poses drawn by band;
-- ``realistic`` (test/data/rendered_realistic): the ``realistic`` profile (lens distortion, the sun's
+- ``realistic`` (src/uav_vision/test/data/rendered_realistic): the ``realistic`` profile (lens distortion, the sun's
   shadows of the drone and the vehicle, motion blur, exposure wander) and a few ``harsh`` frames, each
   frame chosen for what it shows (see REALISTIC). The profile's sensor noise is left out of the PNGs
   (it would make each ten times larger) and recorded in pixel_noise_std_omitted for the test to add.
-Poses come from fixed seeds, so re-running gives the same files. After `source env.sh`:
+Poses come from fixed seeds, so re-running gives the same files. After `source env.sh`, from the workspace:
 
-    MUJOCO_GL=osmesa python src/uav_vision/test/render_fixtures.py [--set ideal|realistic|all]
+    MUJOCO_GL=osmesa python src/landing_bench/test/render_fixtures.py [--set ideal|realistic|all]
+
+then `catkin_make run_tests_uav_vision_gtest_uav_vision_detector_test` reads them.
 """
 import argparse
 import math
@@ -20,10 +26,11 @@ import os
 
 import numpy as np
 
-from uav_vision.rendered_frames import FrameRenderer, View, save_png, write_truth
+from landing_bench.rendered_frames import FrameRenderer, View, save_png, write_truth
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-OUT = {"ideal": os.path.join(HERE, "data", "rendered"), "realistic": os.path.join(HERE, "data", "rendered_realistic")}
+FIXTURES = os.path.realpath(os.path.join(HERE, "..", "..", "uav_vision", "test", "data"))  # uav_vision's
+OUT = {"ideal": os.path.join(FIXTURES, "rendered"), "realistic": os.path.join(FIXTURES, "rendered_realistic")}
 
 # (band, number of images, camera height range above the pad [m], horizontal camera offset from the pad
 # centre [m], maximum tilt [deg], vehicle). Low passes see the pad partly; high ones see all of it.
@@ -185,7 +192,7 @@ def render_realistic(out):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", choices=("ideal", "realistic", "all"), default="all")
-    parser.add_argument("--out", help="directory to write to instead of test/data/<set> (one set only)")
+    parser.add_argument("--out", help="directory to write to instead of src/uav_vision/test/data/<set> (one set only)")
     args = parser.parse_args()
     sets = ("ideal", "realistic") if args.set == "all" else (args.set,)
     if args.out and len(sets) > 1:

@@ -5,9 +5,9 @@ import sys
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from landing_eval.bench_loop import (cpu_bound, node_cpu_per_sim_second, parallel_gain_bound,  # noqa: E402
+from landing_bench.bench_loop import (cpu_bound, node_cpu_per_sim_second, parallel_gain_bound,  # noqa: E402
                                      simulator_shares, stepping_cpu)
-from landing_eval.bus_stats import deliveries_per_sim_second, published_counts  # noqa: E402
+from landing_bench.bus_stats import deliveries_per_sim_second, published_counts  # noqa: E402
 
 
 def _sample(sim_s, nodes):
@@ -59,7 +59,7 @@ def test_the_simulators_cpu_figures_are_read_from_its_statistics():
 
 
 def test_the_report_tables_rows_have_as_many_columns_as_their_header(capsys):
-    from landing_eval.bench_loop import report
+    from landing_bench.bench_loop import report
     row = {"profile": "ideal", "label": "ideal", "sim_alone_rtf": 12.0, "loop_rtf": 4.8, "outcome": "landed_on_pad",
            "phases": {"start_up": 2.3, "shut_down": 0.6}, "steps": {}, "simulator": {}, "sim_alone_cpu": {},
            "sim_loop_cpu": {}, "cpu": {"sim": 0.15, "tracker": 0.03}, "hot": {}, "deliveries": {"rows": []},
@@ -76,7 +76,7 @@ def test_the_report_tables_rows_have_as_many_columns_as_their_header(capsys):
 
 
 def test_py_spys_frames_of_waiting_threads_count_as_idle(tmp_path):
-    from landing_eval.bench_loop import hot_functions
+    from landing_bench.bench_loop import hot_functions
     (tmp_path / "tracker.txt").write_text(
         "Thread._bootstrap (threading.py:995);recv_buff (rospy/impl/tcpros_base.py:106) 60\n"
         "main (node.py:9);socket.accept (socket.py:294) 10\n"

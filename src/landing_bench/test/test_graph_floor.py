@@ -1,4 +1,4 @@
-"""The graph floor (landing_eval.graph_floor): its topology arithmetic, ROS-free; its two null nodes against a real
+"""The graph floor (landing_bench.graph_floor): its topology arithmetic, ROS-free; its two null nodes against a real
 master, under a stand-in simulator that ticks the clock and sends an IMU (they must publish at their rates and
 acknowledge what they are told to, and a topology noted from them must give them back); and bench_floor with the
 real simulator."""
@@ -10,8 +10,8 @@ import time
 
 import pytest
 
-from landing_eval import bus_stats, graph_floor
-from landing_eval.graph_floor import NodeShape
+from landing_bench import bus_stats, graph_floor
+from landing_bench.graph_floor import NodeShape
 
 STATE = ([["/clock", ["/mujoco_sim"]], ["/imu", ["/mujoco_sim"]], ["/odom", ["/estimator"]],
           ["/rosout", ["/estimator", "/tracker"]], ["/lockstep_ack", ["/estimator"]], ["/state", ["/tracker"]],
@@ -229,7 +229,7 @@ def test_a_null_node_without_its_spec_stops_with_a_clear_message(ros_master):
         run = subprocess.run(graph_floor.null_node_command(node) + ["__log:=/dev/null"], env=loopback_environment(env),
                              capture_output=True, text=True, timeout=60)
         assert run.returncode == 2
-        assert "required parameter ~null_spec (set by landing_eval.graph_floor) is missing" in run.stdout + run.stderr
+        assert "required parameter ~null_spec (set by landing_bench.graph_floor) is missing" in run.stdout + run.stderr
 
 
 def test_bench_floor_runs_the_real_simulator_beside_null_nodes(tmp_path):
@@ -239,7 +239,7 @@ def test_bench_floor_runs_the_real_simulator_beside_null_nodes(tmp_path):
     nodes["/null_cpp"].subscribes[0] = {"topic": "/ardrone/odom_estimate", "type": "nav_msgs/Odometry"}
     topology = str(tmp_path / "topology.json")
     graph_floor.save(nodes, topology)
-    run = subprocess.run(["rosrun", "landing_eval", "bench_floor", topology, "--realism", "ideal", "--sim-seconds",
+    run = subprocess.run(["rosrun", "landing_bench", "bench_floor", topology, "--realism", "ideal", "--sim-seconds",
                           "10", "--json", "--timeout", "240"], capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     figures = json.loads(run.stdout.strip().splitlines()[-1])
@@ -248,9 +248,9 @@ def test_bench_floor_runs_the_real_simulator_beside_null_nodes(tmp_path):
     assert {"mujoco_sim", "null_py", "null_cpp"} <= set(figures["cpu"])
     bad = tmp_path / "bad.json"
     bad.write_text('{"/x": {"name": "/x"}}')  # (fields missing)
-    run = subprocess.run(["rosrun", "landing_eval", "bench_floor", str(bad)], capture_output=True, text=True,
+    run = subprocess.run(["rosrun", "landing_bench", "bench_floor", str(bad)], capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 1 and "is not a graph topology" in run.stderr
-    run = subprocess.run(["rosrun", "landing_eval", "bench_floor", topology, "--jobs", "0"], capture_output=True,
+    run = subprocess.run(["rosrun", "landing_bench", "bench_floor", topology, "--jobs", "0"], capture_output=True,
                          text=True, timeout=120)
     assert run.returncode == 2 and "--jobs must be 1 or more" in run.stderr

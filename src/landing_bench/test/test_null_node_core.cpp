@@ -1,11 +1,11 @@
 // The roscpp null node's arithmetic: publication credits and the header stamp of a serialised message.
 #include <gtest/gtest.h>
-#include <landing_eval/null_node_core.h>
+#include <landing_bench/null_node_core.h>
 
 #include <vector>
 
-using landing_eval::headerStamp;
-using landing_eval::PublicationCredit;
+using landing_bench::headerStamp;
+using landing_bench::PublicationCredit;
 
 TEST(PublicationCredit, KeepsTheRateWhateverTheDriversRate) {
   PublicationCredit slower(20.0, 30.0);  // 20 Hz on a 30 Hz driver: 2 of every 3 events

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from uav_vision import rendered_benchmark
+from landing_bench import rendered_benchmark
 
 
 class _Renderer:

@@ -1,13 +1,12 @@
-"""Scenario validation and scoring (ROS-free)."""
+"""Scenario validation (ROS-free); the scoring of a flight is tested in flight_analysis (test_scoring.py)."""
 import os
 import sys
-from types import SimpleNamespace
 
 import pytest
 import yaml
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from landing_eval import scenario, scoring  # noqa: E402
+from landing_eval import scenario  # noqa: E402
 
 SPEC_EXAMPLE = """
 name: car_straight_10ms
@@ -74,21 +73,6 @@ def test_bad_fields_name_the_file_the_field_and_the_expectation(tmp_path, text, 
 def test_missing_file():
     with pytest.raises(scenario.ScenarioError, match="nope.yaml: scenario file not found"):
         scenario.load("/tmp/nope.yaml")
-
-
-def touchdown(surface, crashed=False, pad_error=0.05):
-    return SimpleNamespace(surface=surface, crashed=crashed, pad_error=pad_error)
-
-
-def test_outcomes():
-    pad, ground = scoring.SURFACE_PAD, scoring.SURFACE_GROUND
-    assert scoring.outcome(None, None, False) == ("timeout", None)
-    assert scoring.outcome(touchdown(pad, crashed=True), 0.1, False) == ("crashed", None)
-    assert scoring.outcome(touchdown(pad, pad_error=0.08), 0.09, False) == ("landed_on_pad", 0.08)
-    assert scoring.outcome(touchdown(pad, pad_error=0.2), 0.3, False) == ("landed_off_pad", None)  # slid off
-    assert scoring.outcome(touchdown(ground), None, True) == ("emergency_landed", None)
-    assert scoring.outcome(touchdown(ground), None, False) == ("landed_off_pad", None)
-    assert scoring.outcome(touchdown(scoring.SURFACE_VEHICLE), None, False) == ("landed_off_pad", None)
 
 
 def test_launch_arguments_carry_every_condition_of_the_scenario(tmp_path):

@@ -3,9 +3,10 @@
 //   rosrun uav_vision detector_benchmark [--dir DIR] [--passes N] [--results FILE] [--worst N]
 //
 // DIR (default: the package's test/data/rendered) holds PNGs and a truth.csv written by
-// uav_vision.rendered_frames (test/render_fixtures.py; scripts/rendered_benchmark renders thousands on the
-// fly and runs this on them). Each frame goes through PadLocalizer::observe() as in the node: IMU
-// attitude, the sonar's median of three readings around the frame, the barometer's mean over 0.1 s. Printed:
+// landing_bench.rendered_frames (src/landing_bench/test/render_fixtures.py; `rosrun landing_bench
+// rendered_benchmark` renders thousands on the fly and runs this on them). Each frame goes through
+// PadLocalizer::observe() as in the node: IMU attitude, the sonar's median of three readings around the frame,
+// the barometer's mean over 0.1 s. Printed:
 //  - recall with the whole pad in view (found within 0.25 m of the truth), and on partial views; at close range
 //    (camera below 0.5 m) with the centre marker wholly in view, and cut by the image border;
 //  - false detections: a pad reported where none is in view, or more than 0.25 m from the truth, as a

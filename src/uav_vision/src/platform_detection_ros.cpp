@@ -199,7 +199,7 @@ void PlatformDetectionRos::onImu(const sensor_msgs::ImuConstPtr& msg) {
     return rejections_->reject(imu_sub_.getTopic(), *problem);
   for (const auto& [name, value] : {std::pair<const char*, double>{"angular_velocity.x", w.x}, {"angular_velocity.y", w.y},
                                     {"angular_velocity.z", w.z}})
-    if (auto problem = landing_msgs::numberProblem(name, value, landing_msgs::kMaxRateRadps))
+    if (auto problem = landing_runtime::numberProblem(name, value, landing_runtime::kMaxRateRadps))
       return rejections_->reject(imu_sub_.getTopic(), *problem);
   // angular_velocity_covariance[0] == -1: no rates (REP 145); the attitude is then held between samples.
   const Eigen::Vector3d body_rate = msg->angular_velocity_covariance[0] == -1.0 ? Eigen::Vector3d::Zero()
@@ -231,7 +231,7 @@ void PlatformDetectionRos::onAltimeter(const landing_msgs::AltimeterConstPtr& ms
                       altimeter_sub_.getTopic().c_str());
     return;
   }
-  if (auto problem = landing_msgs::numberProblem("altitude", msg->altitude, landing_msgs::kMaxAltitudeM))
+  if (auto problem = landing_runtime::numberProblem("altitude", msg->altitude, landing_runtime::kMaxAltitudeM))
     return rejections_->reject(altimeter_sub_.getTopic(), *problem);
   if (auto problem = inputProblem(msg->header, ""))  // an altitude above the ground: any frame
     return rejections_->reject(altimeter_sub_.getTopic(), *problem);
@@ -250,13 +250,13 @@ void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg)
     return;
   }
   for (const auto& [name, value] : {std::pair<const char*, double>{"position.x", p.x}, {"position.y", p.y}, {"position.z", p.z}})
-    if (auto problem = landing_msgs::numberProblem(name, value, landing_msgs::kMaxPositionM))
+    if (auto problem = landing_runtime::numberProblem(name, value, landing_runtime::kMaxPositionM))
       return rejections_->reject(odom_sub_.getTopic(), *problem);
   if (auto problem = inputProblem(msg->header, "")) return rejections_->reject(odom_sub_.getTopic(), *problem);
   const auto& v = msg->twist.twist.linear;
   const Eigen::Vector3d velocity =
       std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) &&
-              Eigen::Vector3d(v.x, v.y, v.z).norm() <= landing_msgs::kMaxSpeedMps
+              Eigen::Vector3d(v.x, v.y, v.z).norm() <= landing_runtime::kMaxSpeedMps
           ? Eigen::Vector3d(v.x, v.y, v.z)
           : Eigen::Vector3d::Zero();
   // The estimator publishes the IMU's attitude turned by the yaw drift it has learnt: what turns this frame's
@@ -271,10 +271,10 @@ void PlatformDetectionRos::onOdomEstimate(const nav_msgs::OdometryConstPtr& msg)
   state_.estimates.add({stamp, Eigen::Vector3d(p.x, p.y, p.z), velocity, heading_turn});
 }
 
-std::optional<landing_msgs::InputProblem> PlatformDetectionRos::inputProblem(const std_msgs::Header& header,
+std::optional<landing_runtime::InputProblem> PlatformDetectionRos::inputProblem(const std_msgs::Header& header,
                                                                            const std::string& frame) const {
-  if (auto problem = landing_msgs::stampProblem(header.stamp, ros::Time::now())) return problem;
-  if (!frame.empty()) return landing_msgs::frameProblem(header.frame_id, frame);
+  if (auto problem = landing_runtime::stampProblem(header.stamp, ros::Time::now())) return problem;
+  if (!frame.empty()) return landing_runtime::frameProblem(header.frame_id, frame);
   return std::nullopt;
 }
 

@@ -15,7 +15,7 @@ namespace uav_vision {
 std::vector<RenderedFrame> loadRenderedFrames(const std::string& dir) {
   const std::string path = dir + "/truth.csv";
   std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open " + path + " (make it with test/render_fixtures.py)");
+  if (!in) throw std::runtime_error("cannot open " + path + " (make it with src/landing_bench/test/render_fixtures.py)");
   auto cells = [](std::string line) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     std::vector<std::string> out;
@@ -37,7 +37,7 @@ std::vector<RenderedFrame> loadRenderedFrames(const std::string& dir) {
     for (size_t i = 0; i < header.size(); ++i) row[header[i]] = values[i];
     auto text = [&](const std::string& key) {
       const auto it = row.find(key);
-      if (it == row.end()) throw std::runtime_error(path + ": no column " + key + " (re-render with test/render_fixtures.py)");
+      if (it == row.end()) throw std::runtime_error(path + ": no column " + key + " (re-render with src/landing_bench/test/render_fixtures.py)");
       return it->second;
     };
     auto num = [&](const std::string& key) {

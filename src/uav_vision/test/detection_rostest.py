@@ -17,7 +17,7 @@ from geometry_msgs.msg import PointStamped, PoseStamped, Twist
 from landing_msgs.msg import Navdata
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Empty
-from landing_msgs import testing
+from landing_runtime import testing
 
 WALL_TIMEOUT = 120.0           # generous: the simulator shares two cores with the node and the test
 RELATIVE_TOLERANCE = 0.15      # pad centre relative to the drone [m]
@@ -75,7 +75,7 @@ class PlatformDetectionTest(unittest.TestCase):
                            ("world", "/platform/current_platform_position_in_world"),
                            ("indicator", "/platform/current_indicator_position_in_ardrone")):
             rospy.Subscriber(topic, PointStamped, cls.received[key].append, queue_size=100)
-        rospy.Subscriber("/ardrone/navdata", Navdata, lambda m: setattr(cls, "navdata", m), queue_size=1)
+        rospy.Subscriber("/drone/navdata", Navdata, lambda m: setattr(cls, "navdata", m), queue_size=1)
         # Stand-in for the drone's own position estimate (another package's job): the GPS as it is.
         cls.odom_estimate = rospy.Publisher("/ardrone/odom_estimate", Odometry, queue_size=5)
         rospy.Subscriber("/ardrone/gps/odom", Odometry, cls.odom_estimate.publish, queue_size=5)

@@ -19,7 +19,7 @@ from landing_msgs.msg import Altimeter
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import CameraInfo, Image, Imu, Range
-from landing_msgs import testing
+from landing_runtime import testing
 
 WALL_TIMEOUT = 60.0
 FX = 256.0
@@ -201,7 +201,7 @@ class NodeInputsTest(unittest.TestCase):
 
     def test_4_frame_without_attitude_is_dropped_with_a_warning(self):
         # 0.3 s ahead: beyond the IMU history (imu_max_offset 0.05 s), within what a clock may be ahead
-        # (landing_msgs/input_check.h: 0.5 s; a stamp further off is dropped for that before)
+        # (landing_runtime/input_check.h: 0.5 s; a stamp further off is dropped for that before)
         stamp = rospy.Time.now()
         self.expect_warning(self.pub["image"], image_msg(stamp + rospy.Duration(0.3), pad_image()),
                             "/ardrone/bottom/image_raw: no /ardrone/imu within")

@@ -17,7 +17,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import CameraInfo, Image, Imu, Range
 from std_srvs.srv import Trigger
-from landing_msgs import testing
+from landing_runtime import testing
 from node_inputs_rostest import CAMERA_HEIGHT, PAD_TOP, camera_info, image_msg, pad_image
 
 NODE = "/platform_detection"
@@ -26,7 +26,7 @@ NEW_BASE = "ardrone/base_link_after_reset"
 WALL_TIMEOUT = 60.0
 RESEND_PERIOD = 0.2  # messages travel on separate connections: what depends on several is sent again [s]
 # Stamps of a frame and its sensors this far ahead of the clock: the node still takes them (0.5 s at most,
-# landing_msgs/input_check.h) and they stay fresh enough (2 s) for the checks after a reset [s].
+# landing_runtime/input_check.h) and they stay fresh enough (2 s) for the checks after a reset [s].
 AHEAD = 0.3
 
 wait_for = functools.partial(testing.wait_for, timeout=WALL_TIMEOUT)

@@ -1,6 +1,6 @@
 // Accuracy and rejections on frames rendered in the realistic profile, and a few in the harsh one
-// (test/data/rendered_realistic, made by test/render_fixtures.py): barrel lens distortion, the drone's
-// shadow across the pad and the vehicle's beside it, motion blur, dark and bright exposure, the red false
+// (test/data/rendered_realistic, made by src/landing_bench/test/render_fixtures.py): barrel lens distortion, the
+// drone's shadow across the pad and the vehicle's beside it, motion blur, dark and bright exposure, the red false
 // target in view, frames without the pad. The profile's sensor noise, left out of the PNGs, is added here.
 #include <cmath>
 #include <cstdio>

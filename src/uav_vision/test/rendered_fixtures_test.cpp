@@ -1,5 +1,6 @@
-// Accuracy on images rendered by the simulator (test/data/rendered, made by test/render_fixtures.py):
-// the pad centre relative to the drone against the ground truth of each render.
+// Accuracy on images rendered by the simulator (test/data/rendered, made by
+// src/landing_bench/test/render_fixtures.py): the pad centre relative to the drone against the ground truth of each
+// render.
 #include <cmath>
 #include <cstdio>
 #include <map>

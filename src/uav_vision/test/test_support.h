@@ -13,7 +13,9 @@
 
 namespace uav_vision::test {
 
-// test/data/rendered (the ideal fixtures) and test/data/rendered_realistic, both by test/render_fixtures.py.
+// test/data/rendered (the ideal fixtures) and test/data/rendered_realistic, both made by
+// src/landing_bench/test/render_fixtures.py (the simulator renders them there, in landing_bench: these tests only
+// read the committed files).
 using RenderedFixture = RenderedFrame;
 std::string testDataDir();
 std::string idealFixturesDir();

@@ -300,7 +300,7 @@ def parse_decision(data, bag_t):
 
 
 def outcome(touchdown, resting_error, emergency_ordered):
-    """(outcome, touchdown_error_m) as in landing_eval.scoring (SPEC section 7)."""
+    """(outcome, touchdown_error_m) as in flight_analysis.scoring (SPEC section 7)."""
     from . import scoring
     return scoring.outcome(touchdown, resting_error, emergency_ordered)
 

@@ -177,7 +177,7 @@ def altitude(d, metrics, cols, path):
         low, high = np.nanmin(battery), np.nanmax(battery)
         axb.set_ylim(max(0, low - 2), min(100, high + 2) if high > low else high + 2)
     else:
-        _no_data(axb, "no battery level (%s)" % "/ardrone/navdata")
+        _no_data(axb, "no battery level (%s)" % "/drone/navdata")
     _touchdown_line(axb, metrics)
     axb.set_ylabel("battery [%]")
     axb.set_xlabel("sim time [s]")

@@ -89,7 +89,7 @@ def write(metrics, files, out_dir):
     timeline = m.get("state_timeline") or m.get("navdata_timeline")
     if timeline:
         lines += ["From %s." % ("/platform_tracking/state" if m.get("state_timeline") else
-                               "/ardrone/navdata (the tracker's state is not in the bag)"), "",
+                               "/drone/navdata (the tracker's state is not in the bag)"), "",
                   "| state | from [s] | to [s] | duration [s] |", "|---|---|---|---|"]
         lines += ["| %s | %.2f | %.2f | %.2f |" % (s["state"], s["start_s"], s["end_s"], s["duration_s"]) for s in timeline]
     else:

@@ -1,11 +1,15 @@
 """analyze: report of one flight from its ROS 1 bag, without ROS (rosbags, numpy, matplotlib).
 
+Users run it through landing_eval's entry point, which adds the scenario beside the bag (its wind):
+
     rosrun landing_eval analyze BAG --out DIR
     .venv/bin/python -m landing_eval.analyze BAG --out DIR     # plain shell: no ROS sourced, no master
     .venv/bin/python src/landing_eval/scripts/analyze BAG --out DIR
+    .venv/bin/python -m flight_analysis.analyze BAG --out DIR  # this module alone: no scenario is read
 
-(``python -m landing_eval.analyze`` finds the package through the .pth file `make build` writes into the
-venv, so it works from any directory of a shell where nothing is sourced.)
+(``python -m ...`` finds the packages through the .pth file `make build` writes into the venv, so it works
+from any directory of a shell where nothing is sourced.) This package imports nothing of the workspace's
+other packages: the scenario is read by a ``load_scenario`` function its caller hands in.
 
 Writes to DIR: ``metrics.json`` (outcome, touchdown error, time to land, tracking / vision / prediction
 errors, state timeline, supervisor decisions, battery, wind; a metric the bag cannot give is null and
@@ -28,7 +32,7 @@ import numpy as np
 
 if __package__ in (None, ""):  # run as a file: make the package importable
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    __package__ = "landing_eval"  # noqa: A001
+    __package__ = "flight_analysis"  # noqa: A001
 
 from . import analysis_metrics as M  # noqa: E402
 from .analysis_bag import BagError, Flat, read_bag  # noqa: E402
@@ -36,7 +40,8 @@ from .analysis_bag import BagError, Flat, read_bag  # noqa: E402
 T_DRONE = "/groundtruth/ardrone"
 T_DRONE_ODOM = "/ardrone/ground_truth/state"
 T_PAD = "/groundtruth/landing_pad"
-T_NAVDATA = "/ardrone/navdata"
+T_NAVDATA = "/drone/navdata"
+T_NAVDATA_BEFORE = "/ardrone/navdata"  # the same (landing_msgs/Navdata) in bags of before the drivers' interfaces
 T_TOUCHDOWN = "/ardrone/touchdown"
 T_TAKEOFF = "/ardrone/takeoff"
 T_LAND = "/ardrone/land"
@@ -53,7 +58,7 @@ T_OPERATOR = "/operator/command"
 T_EMERGENCY = "/emergency/position"
 T_ROSOUT = "/rosout_agg"
 IMAGE_TOPICS = ("/platform_detection/debug_image", "/ardrone/bottom/image_raw")
-TOPICS = (T_DRONE, T_DRONE_ODOM, T_PAD, T_NAVDATA, T_TOUCHDOWN, T_TAKEOFF, T_LAND, T_VISION, T_VISION_REL,
+TOPICS = (T_DRONE, T_DRONE_ODOM, T_PAD, T_NAVDATA, T_NAVDATA_BEFORE, T_TOUCHDOWN, T_TAKEOFF, T_LAND, T_VISION, T_VISION_REL,
           T_PREDICTION, T_KALMAN, T_ESTIMATE, T_STATE, T_TRACKER_CMD, T_DECISIONS, T_MODE, T_OPERATOR,
           T_EMERGENCY, T_ROSOUT) + IMAGE_TOPICS
 GIF_RATE_HZ = 2.0
@@ -131,7 +136,7 @@ def extract(contents):
     if d["drone"] is None and get(T_DRONE_ODOM):
         d["drone"], d["drone_source"] = _pose_track(get(T_DRONE_ODOM), odometry=True), T_DRONE_ODOM
     d["pad"] = _pose_track(get(T_PAD))
-    nav = get(T_NAVDATA)
+    nav = get(T_NAVDATA) or [(t, m) for t, m in get(T_NAVDATA_BEFORE) or () if not hasattr(m, "batteryPercent")]
     if nav:
         a = np.array([((m.stamp if m.stamp > 0 else t,) + m.values[:3]) if isinstance(m, Flat) else
                       (_stamp(m, t), m.state, m.battery_percent, m.altitude) for t, m in nav], dtype=float)
@@ -170,14 +175,16 @@ def extract(contents):
 # ----------------------------------------------------------------------------------------------------
 # Metrics
 
-def _load_scenario(bag_path):
-    """The scenario of a run_scenario output directory (result.json beside the bag), or None."""
+def _load_scenario(bag_path, load_scenario=None):
+    """The scenario of a run_scenario output directory (result.json beside the bag) as ``load_scenario(path)``
+    reads it (landing_eval.scenario.load, handed in by landing_eval.analyze), or None."""
+    if load_scenario is None:
+        return None
     result_path = os.path.join(os.path.dirname(os.path.abspath(bag_path)), "result.json")
     try:
         with open(result_path) as stream:
             result = json.load(stream)
-        from . import scenario
-        return scenario.load(result["scenario"])
+        return load_scenario(result["scenario"])
     except Exception:  # no result.json, no scenario, or a bad one: the wind is then unknown
         return None
 
@@ -360,7 +367,7 @@ def compute_metrics(d, contents, scenario=None):
 
 
 class _Touchdown:
-    """What landing_eval.scoring expects of a landing_msgs/Touchdown."""
+    """What flight_analysis.scoring expects of a landing_msgs/Touchdown."""
 
     def __init__(self, td):
         self.surface, self.crashed, self.pad_error = td["surface_code"], td["crashed"], td["pad_error_m"]
@@ -445,9 +452,10 @@ def write_csv(path, cols):
 # ----------------------------------------------------------------------------------------------------
 # Entry point
 
-def analyze(bag_path, out_dir, plots=True, gif=True):
-    """Analyze one bag; writes the outputs to out_dir and returns the metrics dict.
-    Raises BagError when nothing usable can be read."""
+def analyze(bag_path, out_dir, plots=True, gif=True, load_scenario=None):
+    """Analyze one bag; writes the outputs to out_dir and returns the metrics dict. ``load_scenario``: reads a
+    scenario file (see _load_scenario); None: the scenario is not read. Raises BagError when nothing usable
+    can be read."""
     wall = time.monotonic()
     timing = {}
     contents = read_bag(bag_path, TOPICS, max_rate={topic: GIF_RATE_HZ for topic in IMAGE_TOPICS},
@@ -455,7 +463,7 @@ def analyze(bag_path, out_dir, plots=True, gif=True):
     timing["read_s"] = round(time.monotonic() - wall, 3)
     os.makedirs(out_dir, exist_ok=True)
     d = extract(contents)
-    scenario = _load_scenario(bag_path)
+    scenario = _load_scenario(bag_path, load_scenario)
     metrics = {"bag": os.path.abspath(bag_path)}
     metrics.update(compute_metrics(d, contents, scenario))
     duration = None if contents.start_s is None else round(contents.end_s - contents.start_s, 3)
@@ -463,7 +471,7 @@ def analyze(bag_path, out_dir, plots=True, gif=True):
                            end_s=_round(contents.end_s), duration_s=duration,
                            topics={k: v for k, v in sorted(contents.counts.items())},
                            missing_topics=[t for t in TOPICS if not contents.counts.get(t)
-                                           and t not in IMAGE_TOPICS and t != T_DRONE_ODOM])
+                                           and t not in IMAGE_TOPICS and t not in (T_DRONE_ODOM, T_NAVDATA_BEFORE)])
     cols = timeseries(d, metrics, contents)
     write_csv(os.path.join(out_dir, "timeseries.csv"), cols)
     files = ["metrics.json", "timeseries.csv"]
@@ -515,7 +523,7 @@ def summary_line(m):
     return ", ".join(parts)
 
 
-def main(argv=None):
+def main(argv=None, load_scenario=None):
     parser = argparse.ArgumentParser(prog="analyze", description="Report of one flight from its ROS 1 bag "
                                      "(metrics.json, timeseries.csv, plots, report.md); needs no ROS.")
     parser.add_argument("bag", help="the flight's bag (run_scenario writes DIR/flight.bag)")
@@ -524,7 +532,8 @@ def main(argv=None):
     parser.add_argument("--no-gif", action="store_true", help="skip the camera GIF even when frames exist")
     args = parser.parse_args(argv)
     try:
-        metrics = analyze(args.bag, args.out, plots=not args.no_plots, gif=not args.no_gif)
+        metrics = analyze(args.bag, args.out, plots=not args.no_plots, gif=not args.no_gif,
+                          load_scenario=load_scenario)
     except BagError as err:
         print("analyze: %s" % err, file=sys.stderr)
         return 2

@@ -1,6 +1,6 @@
 """Makes sim_flight.bag (the fixture of test_analysis_bag.py) from a run_scenario bag:
 
-    .venv/bin/python src/landing_eval/test/data/make_fixture.py RUN/flight.bag src/landing_eval/test/data/sim_flight.bag
+    .venv/bin/python src/flight_analysis/test/data/make_fixture.py RUN/flight.bag src/flight_analysis/test/data/sim_flight.bag
 
 Keeps the topics the analysis reads, thins the 50 Hz ones to 10 Hz and the 30 Hz ones to 5 Hz, and copies
 every connection's message definition as recorded (so the fixture carries the real landing_msgs

@@ -1,4 +1,4 @@
-// The ROS-free arithmetic of the graph floor's roscpp null node (landing_eval/src/null_node.cpp).
+// The ROS-free arithmetic of the graph floor's roscpp null node (landing_bench/src/null_node.cpp).
 #pragma once
 
 #include <cstddef>
@@ -7,7 +7,7 @@
 #include <optional>
 #include <utility>
 
-namespace landing_eval {
+namespace landing_bench {
 
 // How many messages of a publication at `rate_hz` go out on one event of a driver at `driver_hz`: the shares
 // add up, so over any span the publication keeps its rate whatever the two rates are.
@@ -40,4 +40,4 @@ inline std::optional<std::pair<uint32_t, uint32_t>> headerStamp(const uint8_t* d
   return std::make_pair(sec, nsec);
 }
 
-}  // namespace landing_eval
+}  // namespace landing_bench

@@ -1,6 +1,6 @@
 """How fast the closed loop runs against the simulator alone, per realism profile, and where the CPU goes.
 
-    rosrun landing_eval bench_loop scenarios/summit_circle_1ms.yaml --out DIR [--profiles ideal,realistic,harsh] [--repeat N]
+    rosrun landing_bench bench_loop scenarios/summit_circle_1ms.yaml --out DIR [--profiles ideal,realistic,harsh] [--repeat N]
 
 For each profile, one after the other on this machine: the simulator alone at full speed with a camera
 subscriber (`bench_sim`), then the whole landing graph on the scenario (`run_scenario`), which samples the
@@ -24,7 +24,9 @@ import sys
 import threading
 import time
 
-from . import bus_stats, processes
+from landing_eval import processes
+
+from . import bus_stats
 
 PROFILES = ("ideal", "realistic", "harsh")
 
@@ -160,7 +162,7 @@ class BusCensus:
     getBusStats every rospy and roscpp node answers over XML-RPC), read when the simulator's /clock has run
     ``after_sim_s`` and again ``span_sim_s`` later (in flight for a scenario such as summit_circle_1ms); the sim
     seconds from the /clock messages the simulator sent to each subscriber. With ``topology_path``, the graph's
-    topology is written there too (landing_eval.graph_floor: what bench_floor builds its null graph of)."""
+    topology is written there too (landing_bench.graph_floor: what bench_floor builds its null graph of)."""
 
     def __init__(self, root_pid, after_sim_s=6.0, span_sim_s=6.0, timeout_s=600.0, topology_path=None):
         self.root_pid, self.after_sim_s, self.span_sim_s = root_pid, after_sim_s, span_sim_s
@@ -241,7 +243,7 @@ def measure_warm(scenario, out, profile, timeout, runs=3):
     fresh graph, each next one on the same graph after its reset, started while the previous run's recorder stops.
     Returns the last run's figures (as measure's), the first's start-up, and what the sweep spent between the last
     two flights (from the release of the one before to the release of the last, less the flight)."""
-    from .run_pool import WarmWorker
+    from landing_eval.run_pool import WarmWorker
     warm_dir = os.path.join(out, "warm")
     worker = WarmWorker(sys.executable, warm_dir)
     specs = [{"python": sys.executable, "file": scenario, "out_dir": os.path.join(warm_dir, "run_%d" % index),
@@ -281,7 +283,7 @@ def measure_floor(topology, profile, sim_seconds, timeout):
 
 
 def measure(scenario, out, profile, sim_seconds, timeout, py_spy=False, warm=True, label=None, floor=True):
-    sim = subprocess.run(["rosrun", "landing_eval", "bench_sim", "--json", "--realism", profile,
+    sim = subprocess.run(["rosrun", "landing_bench", "bench_sim", "--json", "--realism", profile,
                           "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)],
                          capture_output=True, text=True, timeout=timeout + 60, stdin=subprocess.DEVNULL)
     lines = [line for line in sim.stdout.splitlines() if line.startswith("{")]

@@ -8,7 +8,7 @@ import os
 import tempfile
 import time
 
-from .isolated_ros import IsolatedLaunch
+from landing_eval.isolated_ros import IsolatedLaunch
 
 
 def measure(sim_seconds, camera_rate, timeout):

@@ -56,7 +56,7 @@ def client_of(bus_stats):
 
 def node_api(uri, timeout=NODE_TIMEOUT_S):
     """A node's XML-RPC API that gives up after ``timeout`` wall seconds (a node that hangs must not hang us)."""
-    from .isolated_ros import node_api as bounded_api
+    from landing_eval.isolated_ros import node_api as bounded_api
     return bounded_api(uri, timeout)
 
 

@@ -1,7 +1,7 @@
 """The closed loop's floor: how fast the real simulator runs inside a graph of the same shape as the landing
 graph whose nodes do nothing but exchange the same messages.
 
-    rosrun landing_eval bench_floor TOPOLOGY.json [--realism PROFILE] [--sim-seconds S] [--merge NODE,...|all]
+    rosrun landing_bench bench_floor TOPOLOGY.json [--realism PROFILE] [--sim-seconds S] [--merge NODE,...|all]
                                                   [--jobs N] [--json]
 
 ``bench_loop`` notes the landing graph's topology in flight (topology.json in its run directory: every node's
@@ -31,7 +31,9 @@ import time
 import xmlrpc.client
 from typing import Dict, List
 
-from . import bus_stats, processes
+from landing_eval import processes
+
+from . import bus_stats
 from .bus_stats import SIMULATOR, client_of, publish_rates
 
 # What every node does by itself under sim time, and what the floor sets up on its own: rospy and roscpp subscribe
@@ -196,8 +198,8 @@ def default_messages(types):
 
 def null_node_command(node):
     if node.client == "roscpp":
-        return ["rosrun", "landing_eval", "null_node_cpp", "__name:=" + node.name.lstrip("/")]
-    return [sys.executable, "-m", "landing_eval.null_node", "__name:=" + node.name.lstrip("/")]
+        return ["rosrun", "landing_bench", "null_node_cpp", "__name:=" + node.name.lstrip("/")]
+    return [sys.executable, "-m", "landing_bench.null_node", "__name:=" + node.name.lstrip("/")]
 
 
 def run(nodes, realism="realistic", sim_seconds=30.0, timeout=300.0, vehicle="summit_xl"):
@@ -206,7 +208,7 @@ def run(nodes, realism="realistic", sim_seconds=30.0, timeout=300.0, vehicle="su
     "published": {(node, topic): messages per sim s of the null nodes, as they published them}, "log": the log
     directory}."""
     import rosgraph
-    from .isolated_ros import IsolatedLaunch, IsolatedProcess, graph_unconnected
+    from landing_eval.isolated_ros import IsolatedLaunch, IsolatedProcess, graph_unconnected
     log_dir = tempfile.mkdtemp(prefix="bench_floor_")
     launch = ["mujoco_sim", "sim.launch", "real_time_factor:=0", "output:=log", "realism:=%s" % realism,
               "vehicle:=%s" % vehicle, "wait_for_start:=true"]
@@ -333,7 +335,7 @@ def fidelity(nodes, published, tolerance=0.1):
 
 def command(topology, realism, sim_seconds, timeout, merges=()):
     """bench_floor's command line for one floor, its figures as one JSON line (floor_figures reads them)."""
-    return ([sys.executable, "-m", "landing_eval.graph_floor", topology, "--json", "--realism", realism,
+    return ([sys.executable, "-m", "landing_bench.graph_floor", topology, "--json", "--realism", realism,
              "--sim-seconds", str(sim_seconds), "--timeout", str(timeout)] +
             [argument for group in merges for argument in ("--merge", group)])
 

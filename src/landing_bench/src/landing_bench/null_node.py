@@ -1,4 +1,4 @@
-"""A null node of the graph floor (landing_eval.graph_floor), rospy: the transport of one rospy node of the landing
+"""A null node of the graph floor (landing_bench.graph_floor), rospy: the transport of one rospy node of the landing
 graph without its work.
 
 It reads ``~null_spec`` (graph_floor.NodeShape.null_spec: {"subscribes": [{topic, type}], "publishes": [{topic,
@@ -78,7 +78,7 @@ def main():
     init_node("null_node")
     spec = rospy.get_param("~null_spec", None)
     if not isinstance(spec, dict):
-        rospy.logfatal("%s: required parameter ~null_spec (set by landing_eval.graph_floor) is missing",
+        rospy.logfatal("%s: required parameter ~null_spec (set by landing_bench.graph_floor) is missing",
                        rospy.get_name())
         return 2
     try:

@@ -1,8 +1,8 @@
 """ray_scaling: the same sweep run locally and as Ray tasks on Ray nodes started on this machine, timed.
 
-    rosrun landing_eval ray_scaling scenarios/stress/short_sweep --out /tmp/scaling [--configs local,ray,ray1,ray1+1]
-    rosrun landing_eval ray_scaling scenarios/stress/short_sweep --out /tmp/jobs --configs local1,local2
-    rosrun landing_eval ray_scaling scenarios/stress/short_sweep --out /tmp/warm --configs local1,warm1,local2,warm2
+    rosrun landing_bench ray_scaling scenarios/stress/short_sweep --out /tmp/scaling [--configs local,ray,ray1,ray1+1]
+    rosrun landing_bench ray_scaling scenarios/stress/short_sweep --out /tmp/jobs --configs local1,local2
+    rosrun landing_bench ray_scaling scenarios/stress/short_sweep --out /tmp/warm --configs local1,warm1,local2,warm2
 
 Configurations: ``local`` (benchmark --jobs CPUS), ``localN`` (benchmark --jobs N), ``warmN`` (benchmark --jobs N
 --warm: each job's graph reset between its runs), ``ray`` (one Ray node with CPUS CPUs), ``rayA+B`` (a head with A
@@ -20,7 +20,7 @@ import subprocess
 import sys
 import time
 
-from .ray_local import RayNode
+from landing_eval.ray_local import RayNode
 
 
 def sweep(scenarios, out, extra):

@@ -1,9 +1,9 @@
 """Detection benchmark on thousands of bottom-camera frames rendered on the fly (nothing is kept).
 
-    rosrun uav_vision rendered_benchmark [--frames 3000] [--profiles realistic harsh] [--seed 1] [--keep DIR]
-                                         [--views approach|close]
+    rosrun landing_bench rendered_benchmark [--frames 3000] [--profiles realistic harsh] [--seed 1] [--keep DIR]
+                                            [--views approach|close]
 
-For each realism profile the same seeded views are rendered with mujoco_sim (uav_vision.rendered_frames)
+For each realism profile the same seeded views are rendered with mujoco_sim (landing_bench.rendered_frames)
 into a temporary directory, and ``detector_benchmark`` scores them: recall with the whole pad in view,
 false detections (a pad reported where none is, or more than 0.25 m from the truth) as a share of all
 frames, recall at close range (camera below 0.5 m, the centre marker at least partly in view), centre error

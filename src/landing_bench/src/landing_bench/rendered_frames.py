@@ -6,8 +6,10 @@ shadows, blur, exposure, noise), with a row of truth: the pad centre relative to
 pad, its strip, its marker and the red false target is in view (through the distorted lens), the share
 of the pad in shadow, and what the drone's own sensors read there (IMU attitude, sonar, barometer).
 
-Used by test/render_fixtures.py (the committed gtest fixtures) and by rendered_benchmark (thousands of
-frames rendered on the fly). Columns of the truth rows: ``TRUTH_COLUMNS``.
+Used by test/render_fixtures.py (the committed fixtures of uav_vision's gtests, src/uav_vision/test/data, which
+uav_vision's C++ reads through include/uav_vision/rendered_frames.h) and by rendered_benchmark (thousands of
+frames rendered on the fly for uav_vision's detector_benchmark). Here, in landing_bench, because rendering needs
+the simulator: uav_vision itself does not depend on mujoco_sim. Columns of the truth rows: ``TRUTH_COLUMNS``.
 """
 import dataclasses
 import math

@@ -19,7 +19,7 @@ def fly(timeout):
 
     rospy.init_node("demo_flight", disable_signals=True)
     latest = {}
-    rospy.Subscriber("ardrone/navdata", Navdata, lambda m: latest.update(navdata=m))
+    rospy.Subscriber("drone/navdata", Navdata, lambda m: latest.update(navdata=m))
     rospy.Subscriber("ardrone/ground_truth/state", Odometry, lambda m: latest.update(truth=m))
     rospy.Subscriber("ardrone/touchdown", Touchdown, lambda m: latest.update(touchdown=m))
     cmd = rospy.Publisher("ardrone/cmd_vel", Twist, queue_size=1)

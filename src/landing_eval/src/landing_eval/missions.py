@@ -4,7 +4,7 @@ as scoring.outcome does for a single flight), and what the operator does before 
 
 The outcome of a run with several missions is the worst of its missions' outcomes, so that an `expect:`
 block asking for landed_on_pad holds only if every mission landed on the pad."""
-from . import scoring
+from flight_analysis import scoring
 
 # From the worst to the best: the run's outcome is its worst mission's.
 SEVERITY = ("crashed", "landed_off_pad", "aborted", "timeout", "emergency_landed", "landed_on_pad")

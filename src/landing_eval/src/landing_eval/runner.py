@@ -19,6 +19,7 @@ import sys
 import threading
 import time
 
+from flight_analysis import scoring
 from landing_runtime.rospy_node import NodeHandles
 
 from .isolated_ros import IsolatedCore, IsolatedLaunch, IsolatedProcess, graph_unconnected, reconnect_subscribers
@@ -27,7 +28,6 @@ from . import faults
 from . import missions as missions_mod
 from . import processes
 from . import scenario as scenario_mod
-from . import scoring
 from . import warm_graph
 
 SETTLE_AFTER_TOUCHDOWN_S = 1.0  # sim seconds the drone must rest before the outcome is read
@@ -72,7 +72,7 @@ def launch_arguments(s):
     start = s["drone"]["start"]
     c = s["conditions"]
     args = {
-        "vehicle": s["platform"]["vehicle"], "path": s["platform"]["path"], "speed": s["platform"]["speed_mps"],
+        "vehicle": s["platform"]["vehicle"], "drone_model": s["drone"]["model"], "path": s["platform"]["path"], "speed": s["platform"]["speed_mps"],
         "radius": s["platform"]["radius_m"], "seed": s["seed"], "camera_rate": s["sensors"]["camera_fps"],
         "camera_noise": s["sensors"]["camera_noise"], "start_on_pad": str(start == "on_pad").lower(),
         "wind_speed": c["wind_speed"], "wind_direction_deg": c["wind_direction_deg"], "wind_gust": c["wind_gust"],
@@ -290,7 +290,7 @@ class FlightMonitor:
 
     def _needed_topics(self):
         """Topics the analysis of the bag cannot do without."""
-        needed = ["/ardrone/navdata", "/ardrone/touchdown", "/groundtruth/ardrone", "/groundtruth/landing_pad",
+        needed = ["/drone/navdata", "/ardrone/touchdown", "/groundtruth/ardrone", "/groundtruth/landing_pad",
                   "/summit_xl/gps/odom", "/tf"]
         return needed + (["/platform_tracking/state"] if self.s.get("_needs_tracker") else [])
 

@@ -9,6 +9,11 @@ import yaml
 
 VEHICLES = ("summit_xl", "car")
 PATHS = ("straight", "circle", "figure8", "back_and_forth", "square", "stop_and_go", "random")
+# The drone models the simulator flies (mujoco_sim's drone_model): ardrone2 is the AR.Drone 2.0 behind its real
+# driver's interface (ardrone_autonomy), velocity_quad the simulator's own velocity-commanded quadrotor.
+DRONE_MODELS = ("ardrone2", "velocity_quad")
+# A scenario that names no model flies its vehicle's default.
+DEFAULT_DRONE_MODEL = {"summit_xl": "velocity_quad", "car": "velocity_quad"}
 OPERATOR_ACTIONS = ("landing", "emergency", "manual", "continue", "quit", "takeoff")
 FAULTS = ("camera_blackout", "kill_node", "detection_false_target")
 CONDITION_PARAMS = ("wind_speed", "wind_direction_deg", "wind_gust", "drone_battery", "control_battery", "temp",
@@ -74,7 +79,8 @@ def validate(data, source):
     }
 
     where = "%s: field 'drone" % source
-    drone = _mapping(top.get("drone"), where + "'", ("start",))
+    drone = _mapping(top.get("drone"), where + "'", ("start", "model"))
+    model = _choice(drone.get("model", DEFAULT_DRONE_MODEL[vehicle]), where + ".model'", DRONE_MODELS)
     start = drone.get("start", "on_pad")
     if start == "on_pad":
         out["drone"] = {"start": "on_pad"}
@@ -85,6 +91,7 @@ def validate(data, source):
         out["drone"] = {"start": {k: _number(start[k], "%s.start.%s'" % (where, k), -1e4, 1e4) for k in "xyz"}}
         if out["drone"]["start"]["z"] < 0.3:
             raise ScenarioError("%s.start.z': a start away from the pad must be in the air (z >= 0.3 m)" % where)
+    out["drone"]["model"] = model
 
     where = "%s: field 'conditions" % source
     conditions = _mapping(top.get("conditions"), where + "'", ("wind_speed", "wind_direction_deg", "gust_mps",

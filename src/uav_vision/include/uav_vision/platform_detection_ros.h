@@ -14,8 +14,8 @@
 #include <Eigen/Geometry>
 #include <image_transport/image_transport.h>
 #include <landing_msgs/Altimeter.h>
-#include <landing_msgs/input_check.h>
-#include <landing_msgs/lockstep_acker.h>
+#include <landing_runtime/input_check.h>
+#include <landing_runtime/lockstep_acker.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -83,7 +83,7 @@ class PlatformDetectionRos {
   void onOdomEstimate(const nav_msgs::OdometryConstPtr& msg);
 
   // A stamp too far from the clock, or (``frame`` not empty) a frame other than ``frame``.
-  std::optional<landing_msgs::InputProblem> inputProblem(const std_msgs::Header& header, const std::string& frame) const;
+  std::optional<landing_runtime::InputProblem> inputProblem(const std_msgs::Header& header, const std::string& frame) const;
   void publish(const std_msgs::Header& image_header, const PadObservation& observation);
   void publishDebugImage(const sensor_msgs::ImageConstPtr& msg, const cv::Mat& image, const PadObservation& observation,
                          const CameraIntrinsics& intrinsics);
@@ -97,9 +97,9 @@ class PlatformDetectionRos {
   image_transport::Publisher debug_pub_;
   ros::Subscriber camera_info_sub_, imu_sub_, sonar_sub_, altimeter_sub_, odom_sub_;
   ros::Publisher platform_in_base_pub_, platform_in_world_pub_, indicator_in_base_pub_;
-  landing_msgs::LockstepAcker lockstep_;
+  landing_runtime::LockstepAcker lockstep_;
   // Garbage on the inputs: what was wrong, once per topic and kind (optional: a reset makes a new one).
-  std::optional<landing_msgs::RejectionLog> rejections_;
+  std::optional<landing_runtime::RejectionLog> rejections_;
   ros::ServiceServer reset_service_;
 };
 

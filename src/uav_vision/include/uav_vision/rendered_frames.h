@@ -1,5 +1,6 @@
 // Frames rendered by the simulator with their ground truth (a directory of PNGs and a truth.csv written by
-// uav_vision.rendered_frames: test/render_fixtures.py, scripts/rendered_benchmark). Read by the gtests and
+// landing_bench.rendered_frames, its columns TRUTH_COLUMNS: src/landing_bench/test/render_fixtures.py for the
+// committed fixtures in test/data, `rosrun landing_bench rendered_benchmark` on the fly). Read by the gtests and
 // detector_benchmark; not part of the detector.
 #pragma once
 
