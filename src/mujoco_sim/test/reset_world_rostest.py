@@ -31,7 +31,7 @@ def _position(pose):
 # topic: (type, what of a message two identical worlds must agree on)
 CONTENT = {
     "/ardrone/imu": (Imu, lambda m: (m.orientation.x, m.orientation.y, m.angular_velocity.z, m.linear_acceleration.z)),
-    "/ardrone/navdata": (Navdata, lambda m: (m.state, m.battery_percent, m.altitude, m.vx, m.vy, m.rot_z)),
+    "/drone/navdata": (Navdata, lambda m: (m.state, m.battery_percent, m.altitude, m.vx, m.vy, m.rot_z)),
     "/ardrone/sonar_height": (Range, lambda m: m.range),
     "/ardrone/gps/odom": (Odometry, lambda m: _position(m.pose.pose)),
     "/summit_xl/gps/odom": (Odometry, lambda m: _position(m.pose.pose)),

@@ -18,7 +18,7 @@ WALL_TIMEOUT = 120.0
 RATES = {  # topic: (type, expected rate in sim time [Hz])
     "/ardrone/imu": (Imu, 50.0), "/ardrone/bottom/image_raw": (Image, 30.0),
     "/ardrone/bottom/camera_info": (CameraInfo, 30.0), "/ardrone/sonar_height": (Range, 25.0),
-    "/ardrone/altimeter": (Altimeter, 20.0), "/ardrone/navdata": (Navdata, 50.0),
+    "/ardrone/altimeter": (Altimeter, 20.0), "/drone/navdata": (Navdata, 50.0),
     "/ardrone/gps/odom": (Odometry, 5.0), "/ardrone/ground_truth/state": (Odometry, 50.0),
     "/summit_xl/joint_states": (JointState, 50.0), "/summit_xl/gps/odom": (Odometry, 5.0),
 }
@@ -65,7 +65,7 @@ class SimNodeTest(unittest.TestCase):
             self.sim_sleep(0.05)
 
     def state(self):
-        return self.latest["/ardrone/navdata"].state
+        return self.latest["/drone/navdata"].state
 
     def truth(self):
         return self.latest["/ardrone/ground_truth/state"].pose.pose.position
@@ -97,14 +97,14 @@ class SimNodeTest(unittest.TestCase):
 
     def test_3_conditions_change_the_world_and_bad_values_are_rejected(self):
         rospy.set_param("/drone_battery", 55.0)
-        wait_for(lambda: abs(self.latest["/ardrone/navdata"].battery_percent - 55.0) < 1.0, "battery set to 55 %")
+        wait_for(lambda: abs(self.latest["/drone/navdata"].battery_percent - 55.0) < 1.0, "battery set to 55 %")
         # A bad value is refused by the world but left where the operator put it (the supervisor must see it).
         rospy.set_param("/drone_battery", 150)
         self.sim_sleep(1.0)
         self.assertEqual(rospy.get_param("/drone_battery"), 150)
-        self.assertLess(self.latest["/ardrone/navdata"].battery_percent, 56.0)
+        self.assertLess(self.latest["/drone/navdata"].battery_percent, 56.0)
         rospy.set_param("/drone_battery", 60.0)
-        wait_for(lambda: abs(self.latest["/ardrone/navdata"].battery_percent - 60.0) < 1.0, "battery set to 60 %")
+        wait_for(lambda: abs(self.latest["/drone/navdata"].battery_percent - 60.0) < 1.0, "battery set to 60 %")
         rospy.set_param("/wind_speed", -5.0)
         self.sim_sleep(1.0)
         self.assertEqual(rospy.get_param("/wind_speed"), -5.0)
@@ -138,7 +138,7 @@ class SimNodeTest(unittest.TestCase):
         """The realism profile in force (realistic by default): a camera frame's stamp is its capture time and
         it arrives after the camera link's latency; navdata likewise after its own."""
         realism = rospy.get_param("/mujoco_sim/realism_in_force")
-        for topic, key in (("/ardrone/bottom/image_raw", "camera"), ("/ardrone/navdata", "navdata")):
+        for topic, key in (("/ardrone/bottom/image_raw", "camera"), ("/drone/navdata", "navdata")):
             latency, jitter = realism[key + "_latency_s"], realism[key + "_latency_jitter_s"]
             delays = self.delays[topic][20:]
             self.assertGreater(len(delays), 50, topic)

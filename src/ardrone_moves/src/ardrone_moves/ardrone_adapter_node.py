@@ -34,7 +34,7 @@ from .velocity_loop import HOVER, CommandRate, TiltVelocityLoop, validated_param
 BOTTOM_CHANNEL = 1          # ardrone/setcamchannel: 0 front, 1 bottom (AR.Drone 2.0)
 SONAR_FIELD_OF_VIEW = 0.7   # the AR.Drone's ultrasound cone, about 40 deg [rad]
 SONAR_RANGE = (0.02, 6.0)   # what altd covers: its ultrasound and, above, the barometer [m]
-ADAPTER_KEYS = ("command_timeout", "altd_unit", "altd_check_samples", "camera_service_timeout",
+ADAPTER_KEYS = ("command_rate", "command_timeout", "altd_unit", "altd_check_samples", "camera_service_timeout",
                 "camera_frame_timeout", "camera_select_attempts", "select_bottom_camera")
 
 
@@ -64,7 +64,7 @@ class ArdroneAdapter:
     def __init__(self):
         loop_params, self.settings = read_settings()
         self.loop = TiltVelocityLoop(loop_params)
-        self.command_rate = CommandRate(loop_params["command_rate"])
+        self.command_rate = CommandRate(float(self.settings["command_rate"]))
         self.altd_check = AltdUnitCheck(self.settings["altd_unit"],
                                         samples_needed=int(self.settings["altd_check_samples"]))
         self.altd_verdict = None

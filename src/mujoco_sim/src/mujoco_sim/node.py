@@ -30,6 +30,7 @@ from std_msgs.msg import Empty, Header, String
 from std_srvs.srv import Trigger, TriggerResponse
 from tf2_msgs.msg import TFMessage
 
+from .ardrone_driver_node import EmulatedArdroneDriver
 from .autopilot import FlightMode
 from .config import ConfigError
 from .frame_renderer import DeliveredFrames
@@ -184,12 +185,15 @@ class SimNode:
         self.pub_image = pub("ardrone/bottom/image_raw", Image, 2)
         self.pub_info = pub("ardrone/bottom/camera_info", CameraInfo)
         self.pub_imu = pub("ardrone/imu", Imu)
-        self.pub_sonar = pub("ardrone/sonar_height", Range)
-        self.pub_altimeter = pub("ardrone/altimeter", Altimeter)
+        # The AR.Drone's driver (drone_model ardrone2) has navdata of its own: the stack's adapter makes the sonar
+        # height, the altimeter and drone/navdata of it. The velocity-commanded drone speaks the stack's types.
+        self.ardrone_driver = EmulatedArdroneDriver(self, pub) if self.sim.ardrone else None
+        self.pub_sonar = None if self.sim.ardrone else pub("ardrone/sonar_height", Range)
+        self.pub_altimeter = None if self.sim.ardrone else pub("ardrone/altimeter", Altimeter)
         self.pub_gt_altitude = pub("ardrone/groundtruth_altitude", Altimeter)
         self.pub_gt_state = pub("ardrone/ground_truth/state", Odometry)
         self.pub_gps = pub("ardrone/gps/odom", Odometry)
-        self.pub_navdata = pub("ardrone/navdata", Navdata)
+        self.pub_navdata = None if self.sim.ardrone else pub("drone/navdata", Navdata)
         self.pub_touchdown = pub("ardrone/touchdown", Touchdown, 10, latch=True)
         self.pub_gt_drone = pub("groundtruth/ardrone", PoseStamped)
         self.pub_gt_summit = pub("groundtruth/summit", PoseStamped)
@@ -222,7 +226,8 @@ class SimNode:
         self.camera_info.header.frame_id = "ardrone/bottom_camera"
 
     def _init_subscribers(self):
-        rospy.Subscriber("ardrone/cmd_vel", Twist, self._on_cmd_vel, queue_size=1, tcp_nodelay=True)
+        if not self.sim.ardrone:  # (the AR.Drone's driver takes cmd_vel: EmulatedArdroneDriver)
+            rospy.Subscriber("ardrone/cmd_vel", Twist, self._on_cmd_vel, queue_size=1, tcp_nodelay=True)
         rospy.Subscriber("summit_xl_control/cmd_vel", Twist, self._on_vehicle_cmd, queue_size=1)
         rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
         rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
@@ -458,6 +463,8 @@ class SimNode:
         # Most 4 ms steps publish nothing of their own (the rates are 5-60 Hz): they only release what the links
         # deliver.
         due = self._publish_measured(t) if t + 1e-9 >= self.next_scheduled else None
+        if self.ardrone_driver is not None:
+            self.ardrone_driver.step(t)
         for link in self.links:
             if link.pending:
                 for publish in link.due(t):
@@ -486,12 +493,14 @@ class SimNode:
                 rospy.logwarn_throttle(30.0, "cannot read the condition parameters (%s): the ROS master is "
                                              "unreachable; keeping the conditions in force" % err)
         if due["camera"] and self.cfg["camera"]["enabled"] and not self.sim.camera_blacked_out() and \
+                (not self.sim.ardrone or (self.sim.camera_channel.bottom_streaming and
+                                          not self.sim.wifi_outage_active())) and \
                 (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()) and \
                 not self.sim.camera_frame_lost():
             self._capture_camera(stamp)
-        if due["imu"] and self.pub_imu.get_num_connections():
+        if due["imu"] and self.pub_imu.get_num_connections() and not (self.sim.ardrone and self.sim.wifi_outage_active()):
             self._send(self.sim.navdata_link, self._imu_message(stamp), self.pub_imu)
-        if due["sonar"] and self.pub_sonar.get_num_connections():
+        if due["sonar"] and self.pub_sonar is not None and self.pub_sonar.get_num_connections():
             self._send(self.sim.navdata_link, self._sonar_message(stamp), self.pub_sonar)
         if due["altimeter"]:
             self._publish_altimeter(stamp)
@@ -501,7 +510,7 @@ class SimNode:
             self._send(self.sim.gps_link, self._gps_message(stamp), self.pub_gps)
         if due["vehicle_gps"] and self.pub_vehicle_gps.get_num_connections():
             self._send(self.sim.gps_link, self._vehicle_gps_message(stamp), self.pub_vehicle_gps)
-        if due["navdata"]:
+        if due["navdata"] and self.pub_navdata is not None:
             self._send(self.sim.navdata_link, self._navdata_message(stamp), self.pub_navdata)
         return due, stamp
 
@@ -621,7 +630,7 @@ class SimNode:
 
     def _publish_altimeter(self, stamp):
         altitude, pressure = self.sim.altimeter()
-        if self.pub_altimeter.get_num_connections():
+        if self.pub_altimeter is not None and self.pub_altimeter.get_num_connections():
             self.pub_altimeter.publish(Altimeter(header=self._header(stamp, "world"), altitude=altitude,
                                                  pressure=pressure, qnh=1013.25))
         if self.pub_gt_altitude.get_num_connections():
