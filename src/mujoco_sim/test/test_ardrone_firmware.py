@@ -17,6 +17,10 @@ CONFIG = os.path.join(PKG, "config", "sim.yaml")
 HOVER = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
+# The driver's indoor defaults, which the figures of the tests below are worked out with.
+DRIVER_DEFAULTS = {"euler_angle_max": 0.21, "control_vz_max": 700.0}
+
+
 def make_sim(realism="ideal", seed=1, ardrone2=None, **overrides):
     overrides.setdefault("realism", {"profile": realism})
     overrides["drone_model"] = "ardrone2"
@@ -59,8 +63,10 @@ def yaw_of(sim):
 def test_the_velocity_quad_stays_the_default_and_the_firmware_ranges_are_enforced():
     config = load_sim_config(CONFIG)
     assert config["drone_model"] == "velocity_quad"
-    assert config["ardrone2"]["euler_angle_max"] == 0.21 and config["ardrone2"]["control_vz_max"] == 700.0
-    assert config["ardrone2"]["control_yaw"] == 1.75 and config["ardrone2"]["altitude_max"] == 3000
+    # The firmware's outdoor settings (its indoor defaults are 0.21 rad and 700 mm/s; see sim.yaml).
+    assert config["ardrone2"]["euler_angle_max"] == 0.35 and config["ardrone2"]["control_vz_max"] == 1000.0
+    # altitude_max above the stack's 4 m (the driver's default, 3000 mm, is below it).
+    assert config["ardrone2"]["control_yaw"] == 1.75 and config["ardrone2"]["altitude_max"] == 6000
     with pytest.raises(ValueError, match=r"'ardrone2/euler_angle_max': got 0.6, expected a number in \[0, 0.52\] rad"):
         load_sim_config(CONFIG, {"ardrone2": {"euler_angle_max": 0.6}})
     with pytest.raises(ValueError, match=r"'ardrone2/control_vz_max': got 100.0, .*\[200, 2000\] mm/s"):
@@ -68,7 +74,7 @@ def test_the_velocity_quad_stays_the_default_and_the_firmware_ranges_are_enforce
     with pytest.raises(ValueError, match=r"'ardrone2/control_yaw': .*\[0.7, 6.11\] rad/s"):
         load_sim_config(CONFIG, {"ardrone2": {"control_yaw": 7.0}})
     with pytest.raises(ValueError, match="'ardrone2/altitude_min' .* must be below 'ardrone2/altitude_max'"):
-        load_sim_config(CONFIG, {"ardrone2": {"altitude_min": 4000}})
+        load_sim_config(CONFIG, {"ardrone2": {"altitude_min": 7000}})
     with pytest.raises(ConfigError, match="'drone_model': got 'bebop'"):
         load_sim_config(CONFIG, {"drone_model": "bebop"})
 
@@ -153,7 +159,7 @@ def test_hovering_on_its_own_flow_estimate_the_drone_follows_the_moving_pad_whil
 
 
 def test_tilt_commands_move_the_drone_in_its_heading_frame_and_climb_and_yaw_at_their_rates():
-    sim = make_sim(noise={"enabled": False})
+    sim = make_sim(noise={"enabled": False}, ardrone2=DRIVER_DEFAULTS)
     airborne(sim)
     # Yaw: counter-clockwise at az * control_yaw.
     run(sim, 0.4, command=(0.0, 0.0, 0.0, 0.0, 0.0, 0.5))
@@ -182,7 +188,7 @@ def test_tilt_commands_move_the_drone_in_its_heading_frame_and_climb_and_yaw_at_
 def test_the_steady_speed_is_bounded_by_the_maximum_tilt():
     """No velocity loop: full forward tilt (0.21 rad, 12 deg) settles where the drag balances it, about 5 m/s
     as a real AR.Drone 2.0."""
-    sim = make_sim(noise={"enabled": False})
+    sim = make_sim(noise={"enabled": False}, ardrone2=DRIVER_DEFAULTS)
     airborne(sim)
     run(sim, 9.0, command=(1.0, 0.0, 0.0, 0.0, 0.0, 0.0))
     speed = heading_velocity(sim)[0]

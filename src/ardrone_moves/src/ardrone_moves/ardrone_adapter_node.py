@@ -34,7 +34,7 @@ from .velocity_loop import HOVER, CommandRate, TiltVelocityLoop, validated_param
 BOTTOM_CHANNEL = 1          # ardrone/setcamchannel: 0 front, 1 bottom (AR.Drone 2.0)
 SONAR_FIELD_OF_VIEW = 0.7   # the AR.Drone's ultrasound cone, about 40 deg [rad]
 SONAR_RANGE = (0.02, 6.0)   # what altd covers: its ultrasound and, above, the barometer [m]
-ADAPTER_KEYS = ("command_rate", "command_timeout", "altd_unit", "altd_check_samples", "camera_service_timeout",
+ADAPTER_KEYS = ("command_rate", "command_timeout", "takeoff_altitude", "altd_unit", "altd_check_samples", "camera_service_timeout",
                 "camera_frame_timeout", "camera_select_attempts", "select_bottom_camera")
 
 
@@ -76,7 +76,7 @@ class ArdroneAdapter:
         self.lock = threading.Lock()
         self.velocity = None            # (stamp [s], Twist) of the last valid velocity command
         self.previous_stamp = None      # of the last navdata used by the loop [s]
-        self.ground_pressure = None     # [Pa] while landed: the barometer's reference
+        self.ground_pressure = None     # [Pa] at rest before the first take-off: the barometer's zero
         self.status = None
 
         self.handles = NodeHandles()
@@ -129,17 +129,21 @@ class ArdroneAdapter:
                                      range=nav.height if in_range else math.inf))
         if nav.pressure is None:
             return
-        if not nav.airborne and nav.state != 6:  # landed (or not yet flying): the take-off reference
-            self.ground_pressure = nav.pressure
-        if self.ground_pressure is not None:
-            self.pub_altimeter.publish(Altimeter(
-                header=rospy.Header(stamp=header.stamp, frame_id="world"),
-                altitude=pressure_altitude(nav.pressure, self.ground_pressure), pressure=nav.pressure / 100.0,
-                qnh=self.ground_pressure / 100.0))
+        if self.ground_pressure is None:
+            if nav.airborne or nav.state == 6:
+                return  # it took off before the adapter heard it at rest: no zero for the barometer
+            self.ground_pressure = nav.pressure  # once: later landings (on the ground, say) keep this reference
+        # The stack's altimeter is the altitude of base_link above the ground: the take-off point's plus the rise.
+        self.pub_altimeter.publish(Altimeter(
+            header=rospy.Header(stamp=header.stamp, frame_id="world"),
+            altitude=self.settings["takeoff_altitude"] + pressure_altitude(nav.pressure, self.ground_pressure),
+            pressure=nav.pressure / 100.0, qnh=self.ground_pressure / 100.0))
 
     def _check_altd(self, altd_raw, nav):
         if self.altd_verdict is not None or not nav.airborne or nav.pressure is None or self.ground_pressure is None:
             return
+        # Over the ground (the vehicle is left behind or below), altd and the barometer's rise above the take-off
+        # point differ by the take-off point's height: the check takes the samples where the rise is large.
         verdict = self.altd_check.add(altd_raw, pressure_altitude(nav.pressure, self.ground_pressure))
         if verdict is not None:
             self.altd_verdict = verdict

@@ -38,6 +38,7 @@ PARAMETER_RANGES = {
     "velocity_p_gain": (0.0, 10.0),         # [1/s]
     "velocity_i_gain": (0.0, 10.0),         # [1/s^2]
     "integral_limit": (0.0, 5.0),           # [m/s^2]
+    "integral_error_limit": (0.05, 10.0),   # [m/s]
     "velocity_feedforward_gain": (0.0, 2.0),  # [-]
     "feedforward_time_constant": (0.01, 2.0),  # [s]
     "linear_drag": (0.0, 3.0),              # [1/s]
@@ -191,8 +192,11 @@ class TiltVelocityLoop:
         self._update_feedforward(desired, dt)
         base = [p["velocity_p_gain"] * error[axis] + p["linear_drag"] * desired[axis] + self._feedforward[axis]
                 for axis in (0, 1)]
-        candidate = [_clip(self._integral[axis] + p["velocity_i_gain"] * error[axis] * dt, p["integral_limit"])
-                     for axis in (0, 1)]
+        # The integral is for wind and drag: it integrates the error clipped to integral_error_limit, so that a
+        # large error (a step, the tracker catching up) does not wind it up and overshoot once it is made up.
+        limit = p["integral_error_limit"]
+        candidate = [_clip(self._integral[axis] + p["velocity_i_gain"] * _clip(error[axis], limit) * dt,
+                           p["integral_limit"]) for axis in (0, 1)]
         acceleration = [base[axis] + candidate[axis] for axis in (0, 1)]
         tilt, saturated = self._tilt_fractions(acceleration)
         if saturated:
