@@ -31,6 +31,7 @@ from std_srvs.srv import Trigger, TriggerResponse
 from tf2_msgs.msg import TFMessage
 
 from .ardrone_driver_node import EmulatedArdroneDriver
+from .gps_receiver import GpsReceiver
 from .autopilot import FlightMode
 from .config import ConfigError
 from .frame_renderer import DeliveredFrames
@@ -192,7 +193,11 @@ class SimNode:
         self.pub_altimeter = None if self.sim.ardrone else pub("ardrone/altimeter", Altimeter)
         self.pub_gt_altitude = pub("ardrone/groundtruth_altitude", Altimeter)
         self.pub_gt_state = pub("ardrone/ground_truth/state", Odometry)
-        self.pub_gps = pub("ardrone/gps/odom", Odometry)
+        # The drone's GPS: the AR.Drone carries a receiver of its own (its driver publishes none), which reports as a
+        # receiver's driver does (nmea_navsat_driver: NavSatFix and an ENU TwistStamped); the velocity-commanded drone
+        # speaks the stack's local odometry.
+        self.gps_receiver = GpsReceiver(pub, "ardrone/gps", "ardrone/base_link") if self.sim.ardrone else None
+        self.pub_gps = None if self.sim.ardrone else pub("ardrone/gps/odom", Odometry)
         self.pub_navdata = None if self.sim.ardrone else pub("drone/navdata", Navdata)
         self.pub_touchdown = pub("ardrone/touchdown", Touchdown, 10, latch=True)
         self.pub_gt_drone = pub("groundtruth/ardrone", PoseStamped)
@@ -506,7 +511,11 @@ class SimNode:
             self._publish_altimeter(stamp)
         if due["ground_truth"]:
             self._publish_ground_truth(stamp)
-        if due["gps"] and self.pub_gps.get_num_connections():
+        if due["gps"] and self.gps_receiver is not None:
+            fix = self.sim.gps()
+            for message, publisher in self.gps_receiver.messages(fix, stamp):
+                self._send(self.sim.gps_link, message, publisher)
+        elif due["gps"] and self.pub_gps.get_num_connections():
             self._send(self.sim.gps_link, self._gps_message(stamp), self.pub_gps)
         if due["vehicle_gps"] and self.pub_vehicle_gps.get_num_connections():
             self._send(self.sim.gps_link, self._vehicle_gps_message(stamp), self.pub_vehicle_gps)
