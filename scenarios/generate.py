@@ -42,10 +42,10 @@ CRASHES = (
 
 def scenario(name, seed, vehicle="summit_xl", path="straight", speed=1.0, radius=10.0, time_limit=120.0,
              conditions=None, sensors=None, events=None, start="on_pad", expect=None, description="", realism=None,
-             comment=None, landing_at=0):
+             comment=None, landing_at=0, drone_model=None):
     out = {"name": name, "description": description, "seed": seed, "time_limit_s": time_limit,
            "platform": {"vehicle": vehicle, "path": path, "speed_mps": speed, "radius_m": radius},
-           "drone": {"start": start},
+           "drone": dict({"start": start}, **({"model": drone_model} if drone_model else {})),
            "conditions": dict({"wind_speed": 0.0, "wind_direction_deg": 0.0, "gust_mps": 0.0, "drone_battery": 90,
                                "control_battery": 80, "temp": 15}, **(conditions or {})),
            "sensors": dict({"camera_noise": 0.0, "camera_fps": 30}, **(sensors or {})),
@@ -198,6 +198,12 @@ def suite():
         expect={"outcome": "aborted"},
         description="the simulator (the world itself) dies: not restarted; roslaunch ends the run (required), "
                     "run_scenario reports it aborted with the reason and the bag is readable to the kill")
+    # The AR.Drone's Wi-Fi drops: no navdata, video, GPS or commands for a while. Its firmware hovers on its own
+    # (after 2 s without a command) and lands by itself after 5 s more; the stack holds and takes over again.
+    for duration, at_s in ((1.5, 8.0), (3.0, 18.0), (6.0, 18.0)):
+        add("link_loss_%gs_at%g" % (duration, at_s), path="circle", speed=1.0, drone_model="ardrone2",
+            events=[{"at_s": at_s, "fault": "link_loss", "duration_s": duration}],
+            description="the AR.Drone's Wi-Fi link lost for %g s from t=%g s" % (duration, at_s))
     return items
 
 

@@ -233,7 +233,7 @@ def test_without_commands_the_watchdog_hovers_then_lands():
     sim = make_sim(ardrone2={"watchdog_hover_s": 0.5, "watchdog_land_s": 1.0})
     airborne(sim)
     run(sim, 0.5, command=(0.5, 0.0, 0.0, 0.0, 0.0, 0.0))
-    assert sim.inject_fault("wifi_outage", 10.0)
+    assert sim.inject_fault("link_loss", 10.0)
     run(sim, 0.4, command=(0.5, 0.0, 0.0, 0.0, 0.0, 0.0))
     assert sim.autopilot.navdata_state == STATE_FLYING  # not yet
     run(sim, 0.3, command=(0.5, 0.0, 0.0, 0.0, 0.0, 0.0))

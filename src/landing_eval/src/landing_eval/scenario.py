@@ -15,7 +15,7 @@ DRONE_MODELS = ("ardrone2", "velocity_quad")
 # A scenario that names no model flies its vehicle's default.
 DEFAULT_DRONE_MODEL = {"summit_xl": "velocity_quad", "car": "velocity_quad"}
 OPERATOR_ACTIONS = ("landing", "emergency", "manual", "continue", "quit", "takeoff")
-FAULTS = ("camera_blackout", "kill_node", "detection_false_target")
+FAULTS = ("camera_blackout", "kill_node", "detection_false_target", "link_loss")
 CONDITION_PARAMS = ("wind_speed", "wind_direction_deg", "wind_gust", "drone_battery", "control_battery", "temp",
                     "drone_speed")
 OUTCOMES = ("landed_on_pad", "landed_off_pad", "emergency_landed", "crashed", "timeout", "aborted")

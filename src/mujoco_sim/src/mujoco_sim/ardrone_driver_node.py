@@ -53,7 +53,7 @@ class EmulatedArdroneDriver:
         schedule = self.sim.navdata_schedule
         link = self.sim.navdata_link
         for _ in range(schedule.samples_due(now)):
-            if self.sim.wifi_outage_active() or (link.loss > 0.0 and link.lost_next()):
+            if self.sim.link_lost() or (link.loss > 0.0 and link.lost_next()):
                 continue
             packet = self.sim.ardrone_navdata()
             link.push(self.sim.time, lambda packet=packet: self._received(packet))

@@ -499,11 +499,11 @@ class SimNode:
                                              "unreachable; keeping the conditions in force" % err)
         if due["camera"] and self.cfg["camera"]["enabled"] and not self.sim.camera_blacked_out() and \
                 (not self.sim.ardrone or (self.sim.camera_channel.bottom_streaming and
-                                          not self.sim.wifi_outage_active())) and \
+                                          not self.sim.link_lost())) and \
                 (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()) and \
                 not self.sim.camera_frame_lost():
             self._capture_camera(stamp)
-        if due["imu"] and self.pub_imu.get_num_connections() and not (self.sim.ardrone and self.sim.wifi_outage_active()):
+        if due["imu"] and self.pub_imu.get_num_connections() and not (self.sim.ardrone and self.sim.link_lost()):
             self._send(self.sim.navdata_link, self._imu_message(stamp), self.pub_imu)
         if due["sonar"] and self.pub_sonar is not None and self.pub_sonar.get_num_connections():
             self._send(self.sim.navdata_link, self._sonar_message(stamp), self.pub_sonar)
@@ -512,9 +512,9 @@ class SimNode:
         if due["ground_truth"]:
             self._publish_ground_truth(stamp)
         if due["gps"] and self.gps_receiver is not None:
-            fix = self.sim.gps()
-            for message, publisher in self.gps_receiver.messages(fix, stamp):
-                self._send(self.sim.gps_link, message, publisher)
+            if not self.sim.link_lost():  # (its data rides the link)
+                for message, publisher in self.gps_receiver.messages(self.sim.gps(), stamp):
+                    self._send(self.sim.gps_link, message, publisher)
         elif due["gps"] and self.pub_gps.get_num_connections():
             self._send(self.sim.gps_link, self._gps_message(stamp), self.pub_gps)
         if due["vehicle_gps"] and self.pub_vehicle_gps.get_num_connections():

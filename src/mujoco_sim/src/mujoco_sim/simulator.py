@@ -149,7 +149,7 @@ class Simulator:
             self.surface_due = 0.0
         else:
             self.autopilot = Autopilot(drone, mass, m.body_inertia[self.drone_body].copy(), rotors, max_rotor_thrust)
-        self.wifi_outage_until = -1.0
+        self.link_lost_until = -1.0
         self.max_total_thrust = 4 * self.autopilot.max_rotor_thrust
         self.command = HOLD
         self.command_time = -1e9
@@ -271,7 +271,7 @@ class Simulator:
         if problem:
             self._send(self._hold)
             return problem
-        if self.time < self.wifi_outage_until:
+        if self.time < self.link_lost_until:
             return None
         if self.command_link.loss > 0.0 and self.command_link.lost_next():
             return None
@@ -294,7 +294,7 @@ class Simulator:
 
     def _send_ardrone_command(self):
         """One AT command with the driver's kept command, over the command link (it may be lost)."""
-        if self.time < self.wifi_outage_until:
+        if self.time < self.link_lost_until:
             return
         if self.command_link.loss > 0.0 and self.command_link.lost_next():
             return
@@ -600,7 +600,7 @@ class Simulator:
         LOG.info(self.touchdown.describe())
 
     # ----- faults (robustness scenarios) --------------------------------------------------------
-    FAULTS = ("camera_blackout", "detection_false_target", "wifi_outage")
+    FAULTS = ("camera_blackout", "detection_false_target", "link_loss")
 
     def inject_fault(self, fault, duration_s):
         """Start a fault for ``duration_s`` sim seconds; returns False for an unknown fault."""
@@ -609,18 +609,18 @@ class Simulator:
             self.camera_blackout_until = until
         elif fault == "detection_false_target" and self.false_target_mocap >= 0:
             self.false_target_until = until
-        elif fault == "wifi_outage":
+        elif fault == "link_loss":
             # No command reaches the drone (drone_model ardrone2: the firmware's watchdog hovers, then lands;
             # velocity_quad: the velocity commands are lost). The node may drop what the drone sends meanwhile
-            # too (wifi_outage_active).
-            self.wifi_outage_until = until
+            # too (link_lost).
+            self.link_lost_until = until
         else:
             return False
         LOG.info("fault %s for %.1f s", fault, duration_s)
         return True
 
-    def wifi_outage_active(self):
-        return self.time < self.wifi_outage_until
+    def link_lost(self):
+        return self.time < self.link_lost_until
 
     def camera_blacked_out(self):
         return self.time < self.camera_blackout_until
