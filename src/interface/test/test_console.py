@@ -117,3 +117,16 @@ def test_flight_management_opened_by_another_ui_leaves_the_start_menu():
     model = ConsoleModel()
     model.on_flight_management({"open": True, "auto_takeoff_at": 30.0})
     assert model.screen == Screen.FLIGHT_MANAGEMENT
+
+
+def test_the_preflight_row_says_what_blocks_the_take_off_and_what_to_do():
+    from interface.console_model import ConsoleModel
+    model = ConsoleModel()
+    assert "preflight" not in [row.key for row in model.rows()]  # no check runs: no row
+    model.on_preflight(False, ["drone/navdata alive: ok",
+                               "camera calibrated: no camera_info yet -- calibrate the bottom camera"])
+    row = [row for row in model.rows() if row.key == "preflight"][0]
+    assert row.alarm and row.text == "take-off blocked: camera calibrated" and "calibrate the bottom camera" in row.note
+    model.on_preflight(True, ["drone/navdata alive: ok", "camera calibrated: ok"])
+    row = [row for row in model.rows() if row.key == "preflight"][0]
+    assert not row.alarm and row.text == "ready (2 items)"

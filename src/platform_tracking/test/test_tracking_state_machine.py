@@ -813,3 +813,18 @@ def test_sonar_is_the_height_above_the_pad_only_right_above_it():
     assert out.height == pytest.approx(4.0)
     out = f.step(drone=drone(height=4.0, sonar=math.inf), pad=pad(f.t + 1 / 30))
     assert out.height == pytest.approx(4.0)
+
+
+
+def test_the_take_off_waits_for_the_preflight_check_and_goes_once_it_passes():
+    lines = []
+    sm = TrackingStateMachine(P, logger=lines.append)
+    on_pad = drone(height=0.0, sonar=0.02)
+    blocked = "camera calibrated: no camera_info yet -- calibrate the bottom camera"
+    out = sm.step(Inputs(0.0, on_pad, None, Nav.LANDED, takeoff=True, takeoff_blocked=blocked))
+    assert sm.state == State.LANDED and not out.send_takeoff
+    assert any("waits for the pre-flight check: camera calibrated" in line for line in lines)
+    out = sm.step(Inputs(0.1, on_pad, None, Nav.LANDED, takeoff_blocked=blocked))
+    assert sm.state == State.LANDED and not out.send_takeoff
+    out = sm.step(Inputs(0.2, on_pad, None, Nav.LANDED))  # the check passes: the pending take-off goes
+    assert sm.state == State.TAKING_OFF and out.send_takeoff

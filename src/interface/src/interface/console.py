@@ -84,7 +84,7 @@ class ConsoleNode:
     def __init__(self, model, plain, teleop=None):
         import rospy
         from geometry_msgs.msg import PointStamped
-        from landing_msgs.msg import Navdata, PositionXYCommand
+        from landing_msgs.msg import Navdata, PositionXYCommand, PreflightStatus
         from nav_msgs.msg import Odometry
         from sensor_msgs.msg import Range
         from std_msgs.msg import Float64, String
@@ -103,6 +103,7 @@ class ConsoleNode:
         rospy.Subscriber("emergency/position", PositionXYCommand,
                          lambda m: self._set(emergency_position=(m.x, m.y)))
         rospy.Subscriber("drone/navdata", Navdata, self._on_navdata)
+        rospy.Subscriber("preflight/status", PreflightStatus, self._on_preflight)
         # One subscription per topic: rospy shares one per topic and process, and its first message class wins
         # (an AnyMsg one made first handed the height's callback undecoded messages). The sonar's own callback
         # also marks it seen.
@@ -119,6 +120,10 @@ class ConsoleNode:
         if teleop is not None:
             from ardrone_moves.node import DroneCommands
             self.drone_commands = DroneCommands("console", self.publisher)
+
+    def _on_preflight(self, msg):
+        with self.lock:
+            self.model.on_preflight(msg.ready, msg.items)
 
     def _set(self, **values):
         with self.lock:

@@ -74,6 +74,7 @@ class ConsoleModel:
         self.target_xy = None              # where the tracker aims (platform_tracking/target) [m]
         self.height = None                 # sonar: feet above the surface below (the pad when over it) [m]
         self.camera_latency = None         # the camera link's delay as the tracker measures it [s]
+        self.preflight = None              # (ready, the items' lines) of preflight/status; None: no check runs
         self.last_decision = {}            # condition -> latest decision
         self.log = []                      # recent messages, newest last
 
@@ -175,7 +176,22 @@ class ConsoleModel:
             decision = self._present_decision(key)
             rows.append(Row(key, label, text, alarm or decision is not None, self._describe(decision),
                             decision.get("flag") if decision else None))
+        if self.preflight is not None:
+            rows.append(self._preflight_row())
         return rows
+
+    def on_preflight(self, ready, items):
+        self.preflight = (bool(ready), list(items))
+
+    def _preflight_row(self):
+        """The pre-flight check: ready, or what blocks the take-off and what to do (the first failed item)."""
+        ready, items = self.preflight
+        failed = [line for line in items if not line.endswith(": ok")]
+        if ready:
+            return Row("preflight", "Pre-flight check", "ready (%d items)" % len(items), False, "")
+        names = ", ".join(line.split(":", 1)[0] for line in failed) or "not ready"
+        return Row("preflight", "Pre-flight check", "take-off blocked: " + names, True,
+                   failed[0].split(": ", 1)[1] if failed else "", 1)
 
     def _present_decision(self, key):
         """The supervisor's latest decision on a condition of this row that is still present (the most

@@ -24,7 +24,7 @@ from geometry_msgs.msg import PointStamped
 from landing_runtime.message_constants import message_constants
 from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
-from landing_msgs.msg import Altimeter, PositionXYCommand, TrackerState
+from landing_msgs.msg import Altimeter, PositionXYCommand, PreflightStatus, TrackerState
 from landing_runtime.rospy_node import init_node
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Range
@@ -206,6 +206,7 @@ class StationNode:
         sub("supervisor/mode", String, word("supervisor/mode", MODES, "mode", setter(mode=lambda m: m.data)))
         sub("supervisor/decisions", String, self._json("supervisor/decisions", self.model.on_decision), queue_size=100)
         sub("supervisor/warning", String, self._json("supervisor/warning", self.model.console.on_warning))
+        sub("preflight/status", PreflightStatus, lambda m: self.model.console.on_preflight(m.ready, m.items))
         sub("supervisor/flight_management", String, self._json("supervisor/flight_management",
                                                                 self.model.console.on_flight_management))
         sub("platform_tracking/state", String, word("platform_tracking/state", TRACKER_STATES, "tracker state",

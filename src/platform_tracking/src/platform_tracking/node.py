@@ -43,7 +43,7 @@ from drone_estimator.flow_surface import WeightForecast
 from drone_estimator.pad_inputs import ESTIMATE_EXTRAPOLATION, ESTIMATE_HISTORY, pad_odometry, world_fix
 from drone_estimator.relative import RelativeTrack
 from geometry_msgs.msg import PointStamped, Twist, Vector3Stamped
-from landing_msgs.msg import Navdata
+from landing_msgs.msg import Navdata, PreflightStatus
 from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog,
                                          choice_problem, numbers_problem, stamp_problem)
 from landing_runtime.lockstep import LockstepAcker
@@ -112,6 +112,9 @@ class TrackingNode:
         self.prediction = None        # PadPrediction built from the two, cached until one changes
         self.requests = []            # operator requests since the last step, in arrival order
         self.landing_allowed = True
+        # With require_preflight, a take-off waits for the pre-flight check's word (none heard: it waits too).
+        self.preflight_blocks = "no pre-flight check heard (start interface's preflight node)" \
+            if self.params.require_preflight else None
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.camera_latency = CameraLatency(DELAY_SAMPLES, LATENCY_PERIOD)  # of the detections' arrival
         # A latency due for platform_tracking/camera_latency, published by the next tick: a callback publishing it
@@ -142,6 +145,8 @@ class TrackingNode:
         subscribe("ardrone/flow_unseen_velocity", Vector3Stamped, self.on_unseen, queue_size=5, tcp_nodelay=True)
         subscribe("ardrone/sonar_height", Range, self.on_sonar, queue_size=5, tcp_nodelay=True)
         subscribe("landing_allowed", Bool, self.on_landing_allowed, queue_size=5)
+        if self.params.require_preflight:
+            subscribe("preflight/status", PreflightStatus, self.on_preflight, queue_size=1)
         subscribe("platform/current_platform_position_in_ardrone", PointStamped, self.on_detection, queue_size=5,
                   tcp_nodelay=True)
         subscribe("platform/current_platform_position_in_world", PointStamped, self.on_world_fix, queue_size=5,
@@ -271,6 +276,11 @@ class TrackingNode:
                 rospy.loginfo("platform_tracking: landing_allowed = %s", bool(msg.data))
             self.landing_allowed = bool(msg.data)
 
+    def on_preflight(self, msg):
+        with self.lock:
+            self.preflight_blocks = None if msg.ready else "; ".join(
+                line for line in msg.items if not line.endswith(": ok")) or "not ready"
+
     def on_command(self, msg):
         command = msg.data.strip().lower()
         problem = choice_problem(command, COMMANDS, "command")
@@ -334,6 +344,7 @@ class TrackingNode:
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in requests, land="land" in requests,
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
+                            takeoff_blocked=self.preflight_blocks,
                             vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight,
                             camera_latency=self.camera_latency.value, relative=self.relative.at(t))
         if latency is not None:

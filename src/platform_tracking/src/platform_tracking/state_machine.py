@@ -81,6 +81,7 @@ class Inputs:
     land: bool = False
     force_land: bool = False
     landing_allowed: bool = True
+    takeoff_blocked: Optional[str] = None   # why the pre-flight check holds the take-off; None: it may go
     vision_age: Optional[float] = None      # time since the latest pad detection arrived [s]; None: never
     flow_weight: float = 0.0                # how much the drone's own velocity follows the vehicle under it (0 the
                                             # ground .. 1 the vehicle; ardrone/flow_unseen_velocity,
@@ -320,6 +321,10 @@ class TrackingStateMachine:
         if inp.drone is None:
             if inp.takeoff:
                 self._event("take-off waits for the state estimate")
+            return
+        if inp.takeoff_blocked is not None:
+            if inp.takeoff:
+                self._event("take-off waits for the pre-flight check: %s" % inp.takeoff_blocked)
             return
         if inp.navdata_state in AIRBORNE_NAV:
             self._transition(State.TAKING_OFF, "take-off requested; the drone is already airborne", t)
