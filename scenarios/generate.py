@@ -267,6 +267,14 @@ def stress_sets():
                                     speed=speed, time_limit=150.0,
                                     description="car on a straight road at %g m/s" % speed))
     sets["realism_compare"] = compare
+    # The AR.Drone 2.0 through its driver's interface (drone_model ardrone2): the suite's Summit XL paths at 1-3 m/s,
+    # its 4 m/s winds, one 8 m/s wind, its camera noise and a blackout, same names and seeds as in the suite.
+    picked = [item for item in suite() if item["name"].startswith(("summit_", "wind_4ms", "camera_noise"))
+              and item["name"].endswith(("_1ms", "_2ms", "_3ms", "dir0", "dir90", "dir225", "straight", "circle"))
+              or item["name"] in ("wind_8ms_dir0", "camera_blackout_2s_at8")]
+    for item in picked:
+        item["drone"] = dict(item["drone"], model="ardrone2")
+    sets["ardrone2"] = picked
     # The car at 15 m/s, 12 seeds (run in realistic and harsh): half the take-offs from the car standing, half
     # from the car at speed (the landing ordered 6 s in): the drone's estimate must keep the car's speed through it.
     sets["car_15ms"] = [
