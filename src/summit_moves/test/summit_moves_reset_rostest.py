@@ -30,7 +30,7 @@ class SummitMovesResetTest(unittest.TestCase):
         cls.stop = threading.Event()
         cls.clock = without_nagle(rospy.Publisher("/clock", Clock, queue_size=1))  # no tick held for an ACK
         threading.Thread(target=cls._run_clock, daemon=True).start()
-        rospy.Subscriber("/summit_xl_control/cmd_vel", Twist,
+        rospy.Subscriber("/robotnik_base_control/cmd_vel", Twist,
                          lambda m: cls.commands.append((round(m.linear.x, 6), round(m.angular.z, 6))), queue_size=100)
         cls.takeoff = rospy.Publisher("/ardrone/takeoff", Empty, queue_size=1)
         rospy.wait_for_service(NODE + "/reset", timeout=WALL_TIMEOUT)

@@ -20,7 +20,7 @@ RECOVERY_TOPICS = {
     "supervisor": ["/landing_allowed"],                   # latched, published once it has taken over
     "emergency": ["/emergency/state"],                    # latched, published at start
     "cmd_vel_mux": ["/ardrone/cmd_vel"],
-    "summit_moves": ["/summit_xl_control/cmd_vel"],
+    "summit_moves": ["/robotnik_base_control/cmd_vel"],
 }
 
 

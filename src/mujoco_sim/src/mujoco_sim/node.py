@@ -233,7 +233,7 @@ class SimNode:
     def _init_subscribers(self):
         if not self.sim.ardrone:  # (the AR.Drone's driver takes cmd_vel: EmulatedArdroneDriver)
             rospy.Subscriber("ardrone/cmd_vel", Twist, self._on_cmd_vel, queue_size=1, tcp_nodelay=True)
-        rospy.Subscriber("summit_xl_control/cmd_vel", Twist, self._on_vehicle_cmd, queue_size=1)
+        rospy.Subscriber("robotnik_base_control/cmd_vel", Twist, self._on_vehicle_cmd, queue_size=1)
         rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
         rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
         rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
@@ -351,7 +351,7 @@ class SimNode:
     def _on_vehicle_cmd(self, msg):
         problem = self.sim.set_vehicle_command(msg.linear.x, msg.angular.z)
         if problem:
-            self.rejections.reject("summit_xl_control/cmd_vel", (
+            self.rejections.reject("robotnik_base_control/cmd_vel", (
                 "non-finite" if "non-finite" in problem else "out of range",
                 "%s: the vehicle stops; send finite speeds in m/s and rad/s" % problem))
 

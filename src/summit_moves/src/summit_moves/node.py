@@ -1,4 +1,4 @@
-"""Drives the vehicle along a scripted path by publishing summit_xl_control/cmd_vel in sim time.
+"""Drives the vehicle along a scripted path by publishing robotnik_base_control/cmd_vel in sim time.
 
 Restarted after a crash (respawn in summit_moves.launch), it carries on along the same path from where the
 vehicle was on it: the path's start time is kept in the private parameter ~started_at with ~launch_id (unique
@@ -72,7 +72,7 @@ class SummitMovesNode:
             self._forget_saved_start()
         self.last_now = None  # to notice ROS time moving back (the simulator restarted): the path starts again
         self.handles = NodeHandles()
-        self.publisher = direct_publisher("summit_xl_control/cmd_vel", Twist)
+        self.publisher = direct_publisher("robotnik_base_control/cmd_vel", Twist)
         self.handles.subscriber("ardrone/takeoff", Empty, self._on_takeoff, queue_size=1)
         self.lockstep = LockstepAcker(period=1.0 / self.rate_hz)
         if self.start_time is not None:
