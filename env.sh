@@ -11,7 +11,7 @@ else
   export MUJOCO_GL="${MUJOCO_GL:-osmesa}"
   export ROS_PYTHON_VERSION=3
   # Network: the ROS master and every node listen on this machine only (loopback), unless ROS_IP or ROS_HOSTNAME
-  # is set before this file is sourced (README, "Security"). roscpp's XML-RPC server ignores ROS_IP: the
+  # is set before this file is sourced (docs/reliability.md, "Security"). roscpp's XML-RPC server ignores ROS_IP: the
   # preloaded liblanding_loopback_bind.so keeps it on loopback too (landing_msgs/src/loopback_bind.c).
   if [ -z "${ROS_IP:-}${ROS_HOSTNAME:-}" ] || [ "${LANDING_ROS_LOOPBACK:-}" = 1 ]; then
     export ROS_IP=127.0.0.1 LANDING_ROS_LOOPBACK=1

@@ -185,7 +185,7 @@ def suite():
     items[-1]["supervisor"] = {"no_operator": True}
     seed += 1
     # A crash (SIGKILL) of every node of the graph mid-flight, on the Summit XL's 10 m circle at 1.5 m/s: each
-    # must end safely (README, "Crashes").
+    # must end safely (docs/reliability.md, "Crashes").
     for name, node, what in CRASHES[1:]:
         add(name, **crash(node, what))
     add("fault_emergency_killed", path="circle", speed=1.5,

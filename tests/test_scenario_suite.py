@@ -34,7 +34,8 @@ def test_stress_sets_are_the_readme_figures_and_stay_out_of_the_suite():
     sets = {name: [scenario.load(f) for f in benchmark.collect([os.path.join(stress, name)])]
             for name in sorted(os.listdir(stress))}
     assert {name: len(items) for name, items in sets.items()} == {"short_sweep": 8, "square_stop_and_go_3ms": 24,
-                                                                  "wind_5ms": 30, "realism_compare": 20, "car_15ms": 12}
+                                                                  "wind_5ms": 30, "realism_compare": 20, "car_15ms": 12,
+                                                                  "ardrone2": 31}
     compare = sets["realism_compare"]
     assert {s["platform"]["path"] for s in compare} == set(scenario.PATHS)
     assert {s["platform"]["speed_mps"] for s in compare if s["platform"]["vehicle"] == "car"} == {5.0, 10.0, 15.0}
@@ -50,5 +51,9 @@ def test_stress_sets_are_the_readme_figures_and_stay_out_of_the_suite():
     assert {(s["platform"]["vehicle"], s["platform"]["path"], s["platform"]["speed_mps"]) for s in car} == \
         {("car", "straight", 15.0)}
     assert sorted(e["at_s"] for s in car for e in s["events"] if e.get("operator") == "landing") == [0] * 6 + [6.0] * 6
+    ardrone = sets["ardrone2"]
+    assert {s["drone"]["model"] for s in ardrone} == {"ardrone2"}
+    by_name = {s["name"]: s for s in (scenario.load(f) for f in benchmark.collect([SUITE]))}
+    assert all(s["seed"] == by_name[s["name"]]["seed"] for s in ardrone)  # the suite's own runs, flown by ardrone2
     # make bench reads scenarios/ itself: none of these is in the suite
     assert not [f for f in benchmark.collect([SUITE]) if os.sep + "stress" + os.sep in f]

@@ -80,10 +80,13 @@ class StationBrowserTest(unittest.TestCase):
         self.assertEqual(first["screen"], "start")
         self.assertEqual(self.driver.find_element(By.ID, "title").text, "Start")
         wait_for(lambda: self.page_state()["t"] > first["t"] + 0.5, "sim time moving on the page")
+        # The conditions, then the pre-flight check (start.launch runs it: a take-off waits for it).
+        wait_for(lambda: len(self.driver.find_elements(By.CSS_SELECTOR, "#conditions tbody tr")) == 7,
+                 "the pre-flight check's row")
         rows = self.driver.find_elements(By.CSS_SELECTOR, "#conditions tbody tr")
         self.assertEqual([r.find_element(By.CLASS_NAME, "label").text for r in rows],
                          ["Wind speed", "Drone speed", "Sensors", "Controller battery charge", "Drone battery charge",
-                          "Temperature"])
+                          "Temperature", "Pre-flight check"])
         wait_for(lambda: self.js("return window.stationStats.frames + (window.stationStats.lastRates ? 1 : 0)") > 0,
                  "a camera frame")
 

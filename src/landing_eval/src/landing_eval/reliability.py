@@ -1,4 +1,4 @@
-"""The reliability figures (README, "Reliability"): each command runs its scenarios with run_scenario, prints a
+"""The reliability figures (docs/reliability.md): each command runs its scenarios with run_scenario, prints a
 table and writes it as Markdown (and JSON) into --out.
 
     rosrun landing_eval soak --out DIR            # 30 missions in one session: outcomes, per-node memory and CPU

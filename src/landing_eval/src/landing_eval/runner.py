@@ -806,7 +806,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             # Before the physics runs: reading /proc for a dozen processes took long enough for the simulator to fly
             # 0.1-0.4 s of sim time before the scenario's events at t = 0 were applied.
             start = monitor.sample_resources("start", wall_start)
-            # Where each process of the graph listens (README, "Security": loopback unless asked otherwise).
+            # Where each process of the graph listens (docs/reliability.md, "Security": loopback unless asked otherwise).
             result["listening"] = processes.listening_of({name: info["pid"] for name, info in start["nodes"].items()})
             step("sampled")
             monitor.release(start_deadline)
