@@ -94,9 +94,10 @@ class PreflightNode:
                 rospy.loginfo("preflight: not ready: %s", "; ".join(line for line in status[0] if ": ok" not in line))
             else:
                 rospy.loginfo("preflight: ready (%d items)", len(items))
-            msg = PreflightStatus(ready=not status[1], items=status[0], failed=status[1])
-            msg.header.stamp = rospy.Time.now()
-            self.pub.publish(msg)
+        # Each tick, not only on a change: a reader checks the stamp against its clock (a stale verdict is no verdict).
+        msg = PreflightStatus(ready=not status[1], items=status[0], failed=status[1])
+        msg.header.stamp = rospy.Time.now()
+        self.pub.publish(msg)
 
     def spin(self):
         spin_at(RATE_HZ, self.tick)

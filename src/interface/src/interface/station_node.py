@@ -206,7 +206,9 @@ class StationNode:
         sub("supervisor/mode", String, word("supervisor/mode", MODES, "mode", setter(mode=lambda m: m.data)))
         sub("supervisor/decisions", String, self._json("supervisor/decisions", self.model.on_decision), queue_size=100)
         sub("supervisor/warning", String, self._json("supervisor/warning", self.model.console.on_warning))
-        sub("preflight/status", PreflightStatus, lambda m: self.model.console.on_preflight(m.ready, m.items))
+        sub("preflight/status", PreflightStatus, self._checked(
+            "preflight/status", lambda m: _header_problem(m, frame=("",)),
+            lambda m: self.model.console.on_preflight(m.ready, m.items)))
         sub("supervisor/flight_management", String, self._json("supervisor/flight_management",
                                                                 self.model.console.on_flight_management))
         sub("platform_tracking/state", String, word("platform_tracking/state", TRACKER_STATES, "tracker state",

@@ -277,6 +277,9 @@ class TrackingNode:
             self.landing_allowed = bool(msg.data)
 
     def on_preflight(self, msg):
+        problem = header_problem(msg, ("",))
+        if problem:
+            return self.rejections.reject("preflight/status", problem)
         with self.lock:
             self.preflight_blocks = None if msg.ready else "; ".join(
                 line for line in msg.items if not line.endswith(": ok")) or "not ready"
