@@ -16,6 +16,8 @@ import time
 import pytest
 from landing_runtime import testing
 
+pytestmark = pytest.mark.slow  # a ROS master, a terminal or minutes: make test, not make check
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKAGE = os.path.dirname(HERE)
 TIMEOUT = 60.0  # [s] generous: a loaded 2-core machine starts Python + rospy slowly

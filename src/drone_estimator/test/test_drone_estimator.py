@@ -150,6 +150,7 @@ def test_gps_velocity_reveals_the_flow_bias_quickly():
     assert learnt_velocity_error(without, (2.0, 0.0), (0.1, -0.05), 1.0) > 1.5 * with_velocity
 
 
+@pytest.mark.slow  # 25 s: a long flight of the estimator alone (make test runs it)
 def test_the_flow_scale_and_the_imu_yaw_drift_are_learnt_from_gps_velocity():
     """A flow 6 % long and an IMU yaw 3 deg off (realism: flow_scale_error_std, yaw drift), on a square at
     3 m/s flown without turning: dead reckoning would go 0.25 m/s astray in a direction that changes at

@@ -11,6 +11,8 @@ import sys
 import pytest
 from landing_runtime import testing
 
+pytestmark = pytest.mark.slow  # a ROS master, a terminal or minutes: make test, not make check
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKAGE = os.path.dirname(HERE)
 CONSOLE = os.path.join(PACKAGE, "scripts", "console")

@@ -13,6 +13,8 @@ import pytest
 from landing_bench import bus_stats, graph_floor
 from landing_bench.graph_floor import NodeShape
 
+pytestmark = pytest.mark.slow  # a ROS master, a terminal or minutes: make test, not make check
+
 STATE = ([["/clock", ["/mujoco_sim"]], ["/imu", ["/mujoco_sim"]], ["/odom", ["/estimator"]],
           ["/rosout", ["/estimator", "/tracker"]], ["/lockstep_ack", ["/estimator"]], ["/state", ["/tracker"]],
           ["/cmd", ["/tracker"]]],

@@ -5,7 +5,10 @@ import subprocess
 import sys
 import time
 
+import pytest
 from landing_eval.isolated_ros import graph_unconnected, reconnect_subscribers, unconnected_subscriptions
+
+pytestmark = pytest.mark.slow  # a ROS master, a terminal or minutes: make test, not make check
 
 STATE = ([("/clock", ["/sim"]), ("/cmd", ["/tracker", "/joystick"])],
          [("/clock", ["/tracker", "/rec"]), ("/cmd", ["/sim"]), ("/nobody_publishes", ["/rec"])], [])

@@ -6,6 +6,10 @@ import socket
 import subprocess
 import sys
 
+import pytest
+
+pytestmark = pytest.mark.slow  # a ROS master, a terminal or minutes: make test, not make check
+
 NODE = """
 import rospy
 from std_msgs.msg import String
