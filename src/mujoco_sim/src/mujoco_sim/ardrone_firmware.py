@@ -144,14 +144,10 @@ class ArdroneFirmware(Autopilot):
             LOG.warning("no command for %.1f s: link lost, hovering", silent)
 
     # ----- modes ---------------------------------------------------------------------------------
-    def takeoff(self, z):
-        """Climb from the flown height ``z`` [m] to takeoff_height above it; only from LANDED."""
-        if self.mode != FlightMode.LANDED:
-            return False
-        self._reset_loops()
-        self.takeoff_target_z = z + self.a["takeoff_height"]
-        self.set_mode(FlightMode.TAKING_OFF, "take-off command")
-        return True
+    @property
+    def takeoff_height(self):
+        """The AR.Drone climbs to its own take-off height (ardrone2/takeoff_height), whatever drone: says."""
+        return self.a["takeoff_height"]
 
     def reset(self):
         super().reset()

@@ -95,9 +95,14 @@ class Autopilot:
         if self.mode != FlightMode.LANDED:
             return False
         self._reset_loops()
-        self.takeoff_target_z = z + self.p["takeoff_height"]
+        self.takeoff_target_z = z + self.takeoff_height
         self.set_mode(FlightMode.TAKING_OFF, "take-off command")
         return True
+
+    @property
+    def takeoff_height(self):
+        """How far above the flown height a take-off climbs [m]."""
+        return self.p["takeoff_height"]
 
     def land(self):
         """Descend at the landing speed until touchdown; horizontal commands still apply."""
