@@ -267,6 +267,9 @@ def test_missing_topics_give_nulls_with_notes_not_a_crash(tmp_path):
     assert m["battery"] is not None and m["navdata_timeline"]
     assert m["max_wind_mps"] is None and "wind" in m["notes"]["max_wind_mps"]
     assert os.path.isfile(os.path.join(out, "errors.png"))
+    # Missing ground truth is news; the emergency coordinates of a flight without an emergency landing are not.
+    assert "/groundtruth/ardrone" in m["data"]["missing_topics"]
+    assert "/emergency/position" not in m["data"]["missing_topics"]
 
 
 def test_decisions_in_a_custom_message_type_are_accepted(tmp_path):

@@ -130,3 +130,13 @@ def test_the_preflight_row_says_what_blocks_the_take_off_and_what_to_do():
     model.on_preflight(True, ["drone/navdata alive: ok", "camera calibrated: ok"])
     row = [row for row in model.rows() if row.key == "preflight"][0]
     assert not row.alarm and row.text == "ready (2 items)"
+
+
+def test_a_drone_resting_on_the_moving_pad_is_not_said_to_be_flying():
+    from interface.console_model import ConsoleModel
+    model = ConsoleModel()
+    model.values["drone_speed"] = 8.0
+    model.flight_speed, model.tracker_state = 1.1, "TRACKING"
+    assert "(flying 1.1 m/s)" in [row.text for row in model.rows() if row.key == "drone_speed"][0]
+    model.tracker_state = "LANDED"  # on the pad of a vehicle driving at 1.1 m/s
+    assert "flying" not in [row.text for row in model.rows() if row.key == "drone_speed"][0]

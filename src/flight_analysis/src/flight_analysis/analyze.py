@@ -129,6 +129,15 @@ def _text(message):
     return message.data if hasattr(message, "data") else str(message)
 
 
+def _expected_absent(metrics):
+    """Topics whose absence from the bag is no news: the fallback and legacy topics, and the emergency
+    coordinates of a flight that made no emergency landing."""
+    absent = {T_DRONE_ODOM, T_NAVDATA_BEFORE}
+    if metrics.get("outcome") != "emergency_landed":
+        absent.add(T_EMERGENCY)
+    return absent
+
+
 def extract(contents):
     """Arrays and lists of everything the analysis uses, from the decoded messages."""
     get = contents.get
@@ -471,7 +480,7 @@ def analyze(bag_path, out_dir, plots=True, gif=True, load_scenario=None):
                            end_s=_round(contents.end_s), duration_s=duration,
                            topics={k: v for k, v in sorted(contents.counts.items())},
                            missing_topics=[t for t in TOPICS if not contents.counts.get(t)
-                                           and t not in IMAGE_TOPICS and t not in (T_DRONE_ODOM, T_NAVDATA_BEFORE)])
+                                           and t not in IMAGE_TOPICS and t not in _expected_absent(metrics)])
     cols = timeseries(d, metrics, contents)
     write_csv(os.path.join(out_dir, "timeseries.csv"), cols)
     files = ["metrics.json", "timeseries.csv"]

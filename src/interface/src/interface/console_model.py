@@ -3,6 +3,10 @@ showed (figures 3.1-3.5), as data the terminal view and the web station render a
 import enum
 import math
 
+from landing_msgs.msg import TrackerState
+
+LANDED = TrackerState.LANDED  # the tracker's state on the pad (or wherever it touched down)
+
 COMMANDS = {  # key -> command published on operator/command (None: handled by the console itself)
     "s": "start", "l": "landing", "m": "manual", "e": "emergency", "c": "continue", "a": "ack",
     "t": "takeoff", "q": "quit", "h": "help",
@@ -171,8 +175,8 @@ class ConsoleModel:
                 alarm = bool(missing)
             else:
                 text, alarm = self._format(key, self.values.get(key), unit)
-                if key == "drone_speed" and self.flight_speed is not None:
-                    text += " (flying %.1f m/s)" % self.flight_speed
+                if key == "drone_speed" and self.flight_speed is not None and self.tracker_state != LANDED:
+                    text += " (flying %.1f m/s)" % self.flight_speed  # (landed on the moving pad, it moves with it)
             decision = self._present_decision(key)
             rows.append(Row(key, label, text, alarm or decision is not None, self._describe(decision),
                             decision.get("flag") if decision else None))
