@@ -34,8 +34,8 @@ from .velocity_loop import HOVER, CommandRate, TiltVelocityLoop, validated_param
 BOTTOM_CHANNEL = 1          # ardrone/setcamchannel: 0 front, 1 bottom (AR.Drone 2.0)
 SONAR_FIELD_OF_VIEW = 0.7   # the AR.Drone's ultrasound cone, about 40 deg [rad]
 SONAR_RANGE = (0.02, 6.0)   # what altd covers: its ultrasound and, above, the barometer [m]
-ADAPTER_KEYS = ("command_rate", "command_timeout", "takeoff_altitude", "altd_unit", "altd_check_samples", "camera_service_timeout",
-                "camera_frame_timeout", "camera_select_attempts", "select_bottom_camera")
+ADAPTER_KEYS = ("command_rate", "command_timeout", "takeoff_altitude", "altd_unit", "altd_check_samples",
+                "camera_service_timeout", "camera_frame_timeout", "camera_select_attempts", "select_bottom_camera")
 
 
 class SettingsError(ValueError):
@@ -142,12 +142,13 @@ class ArdroneAdapter:
     def _check_altd(self, altd_raw, nav):
         if self.altd_verdict is not None or not nav.airborne or nav.pressure is None or self.ground_pressure is None:
             return
-        # Over the ground (the vehicle is left behind or below), altd and the barometer's rise above the take-off
-        # point differ by the take-off point's height: the check takes the samples where the rise is large.
+        # The reference is the barometer's rise above the take-off point: over the pad, the height above the pad, as
+        # altd; over the ground the two differ by the pad's height, which the check's factor-of-2 tolerance absorbs.
         verdict = self.altd_check.add(altd_raw, pressure_altitude(nav.pressure, self.ground_pressure))
         if verdict is not None:
             self.altd_verdict = verdict
-            (rospy.loginfo if verdict.outcome == AGREES else rospy.logerr)("ardrone_adapter: altd unit check: %s", verdict.message)
+            log = rospy.loginfo if verdict.outcome == AGREES else rospy.logerr
+            log("ardrone_adapter: altd unit check: %s", verdict.message)
             self._publish_status()
 
     def _command(self, nav):

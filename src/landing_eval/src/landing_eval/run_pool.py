@@ -377,6 +377,40 @@ def local_runs(specs, jobs):
         pool.shutdown(wait=True)
 
 
+WORKSPACE_MODULES = ("rospy", "landing_msgs.msg", "landing_eval.run_pool")  # what a run's worker must import
+
+
+def _check_ray_workers(ray, timeout):
+    """Once, before any run: every alive node's workers can import the workspace (a node whose Ray was started
+    without `source env.sh` failed every task of a sweep with "No module named 'landing_msgs'"). Raises
+    ConnectionError naming the nodes and how to start their Ray."""
+    from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+    def probe(modules):  # pickled by value (a nested function): it runs even where the workspace is not importable
+        import importlib
+        import socket
+        missing = []
+        for module in modules:
+            try:
+                importlib.import_module(module)
+            except ImportError as err:
+                missing.append(str(err))
+        return socket.gethostname(), missing
+
+    remote = ray.remote(probe)
+    refs = [remote.options(num_cpus=0, scheduling_strategy=NodeAffinitySchedulingStrategy(node["NodeID"], soft=False))
+            .remote(WORKSPACE_MODULES) for node in ray.nodes() if node.get("Alive")]
+    ready, pending = ray.wait(refs, num_returns=len(refs), timeout=timeout)
+    problems = ["%s: %s" % (host, "; ".join(missing)) for host, missing in ray.get(ready) if missing]
+    if pending:
+        problems.append("%d node(s) did not answer within %.0f s" % (len(pending), timeout))
+    if problems:
+        raise ConnectionError("the Ray cluster's workers cannot run the workspace (%s): on every node, start Ray "
+                              "from a shell where the workspace is sourced, at the same path: cd WORKSPACE && source "
+                              "env.sh && ray start --address=HEAD:6379 (the head: ray start --head)"
+                              % " | ".join(problems))
+
+
 def ray_runs(specs, address, cpus_per_run, idle_timeout):
     """Yields (spec, outcome) as Ray tasks finish: one task per run, ``cpus_per_run`` CPUs each, on any node of
     the cluster at ``address`` ('auto': the one this machine belongs to). A task whose worker or node dies is
@@ -392,6 +426,7 @@ def ray_runs(specs, address, cpus_per_run, idle_timeout):
                               "see the README)" % (address, err)) from err
     refs = {}
     try:
+        _check_ray_workers(ray, idle_timeout)
         task = ray.remote(execute_run).options(num_cpus=cpus_per_run, max_retries=RAY_MAX_RETRIES,
                                                retry_exceptions=False)
         refs = {task.remote(dict(spec, env=forwarded_environment())): spec for spec in specs}
