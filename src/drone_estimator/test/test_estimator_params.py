@@ -9,6 +9,7 @@ import yaml
 
 from drone_estimator.params import EstimatorParams, FlowSurfaceParams
 from landing_runtime.params import ParamError, from_mapping
+from landing_runtime.testing import yaml_key_comments
 
 CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "config")
 VEHICLES = ("summit_xl", "car")
@@ -31,18 +32,7 @@ def test_the_flow_surface_files_load_and_are_consistent(vehicle):
 
 def test_every_key_of_the_estimator_file_is_commented_with_its_meaning_and_unit():
     name, cls = "estimator.yaml", EstimatorParams
-    comments = {}  # key -> its comment, continuation lines ("   # ...") included
-    key = None
-    with open(os.path.join(CONFIG, name)) as stream:
-        for line in stream:
-            match = re.match(r"^([a-z_]+):", line)
-            if match:
-                key = match.group(1)
-                comments[key] = line.partition("#")[2].strip()
-            elif key and re.match(r"^\s+#", line):
-                comments[key] += " " + line.strip().lstrip("#").strip()
-            else:
-                key = None
+    comments = yaml_key_comments(os.path.join(CONFIG, name))
     assert set(comments) == {f.name for f in dataclasses.fields(cls)}
     for key, comment in comments.items():
         assert comment, "%s: '%s' has no comment" % (name, key)

@@ -8,6 +8,7 @@ import pytest
 import yaml
 
 from landing_runtime.params import ParamError, from_mapping
+from landing_runtime.testing import yaml_key_comments
 from platform_tracking.params import TrackingParams
 
 CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "config")
@@ -24,18 +25,7 @@ def test_config_files_load_and_equal_the_code_defaults(name):
 
 @pytest.mark.parametrize("name", sorted(FILES))
 def test_every_key_is_commented_with_its_meaning_and_unit(name):
-    comments = {}  # key -> its comment, continuation lines ("   # ...") included
-    key = None
-    with open(os.path.join(CONFIG, name)) as stream:
-        for line in stream:
-            match = re.match(r"^([a-z_]+):", line)
-            if match:
-                key = match.group(1)
-                comments[key] = line.partition("#")[2].strip()
-            elif key and re.match(r"^\s+#", line):
-                comments[key] += " " + line.strip().lstrip("#").strip()
-            else:
-                key = None
+    comments = yaml_key_comments(os.path.join(CONFIG, name))
     assert set(comments) == {f.name for f in dataclasses.fields(FILES[name])}
     for key, comment in comments.items():
         assert comment, "%s: '%s' has no comment" % (name, key)

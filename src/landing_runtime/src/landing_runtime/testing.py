@@ -79,3 +79,21 @@ def crash_and_wait_for_respawn(node, timeout):
         pid = node_pid(node)
         return pid if pid not in (None, old) else None
     return wait_for(respawned, "the respawned %s" % node, timeout)
+
+
+def yaml_key_comments(path):
+    """{top-level key: its comment} of a parameter file, a comment's indented continuation lines included: what
+    the tests read to check that every key says its meaning and [unit]."""
+    import re
+    comments, key = {}, None
+    with open(path) as stream:
+        for line in stream:
+            match = re.match(r"^([a-z_]+):", line)
+            if match:
+                key = match.group(1)
+                comments[key] = line.partition("#")[2].strip()
+            elif key and re.match(r"^\s+#", line):
+                comments[key] += " " + line.strip().lstrip("#").strip()
+            else:
+                key = None
+    return comments
