@@ -25,7 +25,7 @@ controller, an Autopilot), NavdataSchedule (navdata rates), CameraChannel (video
 import logging
 import math
 
-from .autopilot import Autopilot, FlightMode
+from .autopilot import Autopilot, FlightMode, body_axes
 
 LOG = logging.getLogger("mujoco_sim.ardrone_firmware")
 
@@ -170,11 +170,7 @@ class ArdroneFirmware(Autopilot):
     def _thrusts(self, dt, position, velocity, quat, omega, command):
         # Plain floats, as Autopilot._thrusts: this runs at every physics step.
         p, a, m = self.p, self.a, self.mass
-        w, x, y, z_q = (float(v) for v in quat)
-        r1 = (1 - 2 * (y * y + z_q * z_q), 2 * (x * y + w * z_q), 2 * (x * z_q - w * y))
-        r2 = (2 * (x * y - w * z_q), 1 - 2 * (x * x + z_q * z_q), 2 * (y * z_q + w * x))
-        r3 = (2 * (x * z_q + w * y), 2 * (y * z_q - w * x), 1 - 2 * (x * x + y * y))
-        yaw = math.atan2(r1[1], r1[0])
+        r1, r2, r3, yaw = body_axes(quat)
         z = float(position[2])
         vx, vy, vz = (float(v) for v in velocity)
         mode = self.mode

@@ -152,12 +152,7 @@ class Autopilot:
         # Plain floats on purpose: this runs 250 times per sim second and numpy's per-call overhead on
         # 3-vectors cost more than the whole physics step.
         p = self.p
-        w, x, y, z_q = (float(v) for v in quat)
-        # Columns of the body rotation (world <- body).
-        r1 = (1 - 2 * (y * y + z_q * z_q), 2 * (x * y + w * z_q), 2 * (x * z_q - w * y))
-        r2 = (2 * (x * y - w * z_q), 1 - 2 * (x * x + z_q * z_q), 2 * (y * z_q + w * x))
-        r3 = (2 * (x * z_q + w * y), 2 * (y * z_q - w * x), 1 - 2 * (x * x + y * y))
-        yaw = math.atan2(r1[1], r1[0])
+        r1, r2, r3, yaw = body_axes(quat)
         z = float(position[2])
         vx, vy, vz = (float(v) for v in velocity)
 
@@ -245,6 +240,17 @@ class Autopilot:
         wrench = (thrust, torque[0], torque[1], torque[2])
         return np.array([max(0.0, min(self.max_rotor_thrust, sum(a * b for a, b in zip(row, wrench))))
                          for row in self.unmix_rows])
+
+
+def body_axes(quat):
+    """Columns of the body rotation (world <- body) of the unit quaternion ``quat`` (w, x, y, z), and the yaw,
+    in plain floats: the control loops run at every physics step."""
+    w, x, y, z_q = (float(v) for v in quat)
+    r1 = (1 - 2 * (y * y + z_q * z_q), 2 * (x * y + w * z_q), 2 * (x * z_q - w * y))
+    r2 = (2 * (x * y - w * z_q), 1 - 2 * (x * x + z_q * z_q), 2 * (y * z_q + w * x))
+    r3 = (2 * (x * z_q + w * y), 2 * (y * z_q - w * x), 1 - 2 * (x * x + y * y))
+    yaw = math.atan2(r1[1], r1[0])
+    return r1, r2, r3, yaw
 
 
 def _cross(a, b):
