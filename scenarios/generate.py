@@ -274,6 +274,10 @@ def stress_sets():
               or item["name"] in ("wind_8ms_dir0", "camera_blackout_2s_at8")]
     for item in picked:
         item["drone"] = dict(item["drone"], model="ardrone2")
+        if item["conditions"]["wind_speed"] >= 6.0:  # beyond the AR.Drone's wind (interface drone_models/ardrone2)
+            item["description"] += ": too strong for the AR.Drone 2.0, no landing on the pad"
+            item["expect"] = {"outcome": ["timeout", "emergency_landed"], "no_pad_landing": True,
+                              "decisions_include": [{"condition": "wind_strong"}]}
     sets["ardrone2"] = picked
     # The car at 15 m/s, 12 seeds (run in realistic and harsh): half the take-offs from the car standing, half
     # from the car at speed (the landing ordered 6 s in): the drone's estimate must keep the car's speed through it.

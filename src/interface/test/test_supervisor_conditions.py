@@ -108,6 +108,60 @@ def test_parse_table_accepts_a_minimal_row():
     assert table.row("gale").param == "wind_speed" and table.params() == ["wind_speed"]
 
 
+# ----- a drone model's limits over the table ----------------------------------------------------------------
+DRONE_MODELS_DIR = os.path.join(HERE, "..", "config", "drone_models")
+DRONE_ROWS = ("platform_too_fast", "wind_strong", "drone_speed_high")
+
+
+@pytest.mark.parametrize("model", ["ardrone2", "velocity_quad"])
+def test_every_drone_model_sets_its_envelope_and_comments_each_key(model):
+    path = os.path.join(DRONE_MODELS_DIR, model + ".yaml")
+    table = load_table(TABLE_PATH, path)
+    assert table.path == "%s + %s" % (TABLE_PATH, path)
+    with open(path) as stream:
+        data = yaml.safe_load(stream)
+    assert set(data["conditions"]) == set(DRONE_ROWS)
+    for name in DRONE_ROWS:  # the drone's threshold, the row's flag and reason
+        assert table.row(name).thresholds == {k: v for k, v in data["conditions"][name].items() if k != "message"}
+        assert table.row(name).flag == load_table(TABLE_PATH).row(name).flag
+    with open(path) as stream:  # every value says its meaning and unit
+        assert all("#" in line for line in stream if line.strip() and not line.lstrip().startswith("#")
+                   and not line.rstrip().endswith(":") and "message:" not in line)
+
+
+def test_the_ardrone_refuses_what_the_simulated_quad_still_lands_in():
+    ardrone = load_table(TABLE_PATH, os.path.join(DRONE_MODELS_DIR, "ardrone2.yaml"))
+    quad = load_table(TABLE_PATH, os.path.join(DRONE_MODELS_DIR, "velocity_quad.yaml"))
+    assert evaluate(ardrone.row("platform_too_fast"), 4.0).present and \
+        not evaluate(quad.row("platform_too_fast"), 4.0).present
+    assert evaluate(ardrone.row("wind_strong"), 8.0).present and not evaluate(quad.row("wind_strong"), 8.0).present
+    assert "AR.Drone" in ardrone.row("platform_too_fast").message
+    assert ardrone.drone_max_horizontal_speed < quad.drone_max_horizontal_speed
+    # its start-up drone_speed is one it can fly, so the warning does not greet every AR.Drone flight
+    assert not evaluate(ardrone.row("drone_speed_high"), ardrone.initial_conditions["drone_speed"]).present
+
+
+@pytest.mark.parametrize("drone, message", [
+    ({"conditions": {"hurricane": {"above": 1.0}}}, "key 'conditions.hurricane' names no row of"),
+    ({"conditions": {"wind_strong": {"flag": 1}}}, "key 'conditions.wind_strong' may set only"),
+    ({"top_speed": 3.0}, "key 'top_speed' is not known"),
+    ({"conditions": {"wind_strong": {"at_or_above": "windy"}}}, "'conditions.wind_strong.at_or_above' must be a finite"),
+    ([1, 2], "must be a mapping"),
+    ({"initial_conditions": {"drone_speed": "fast"}}, "key 'initial_conditions' must map condition parameters"),
+])
+def test_a_malformed_drone_model_names_its_file_and_key(tmp_path, drone, message):
+    path = tmp_path / "drone.yaml"
+    path.write_text(yaml.safe_dump(drone))
+    with pytest.raises(ConditionTableError) as err:
+        load_table(TABLE_PATH, str(path))
+    assert str(path) in str(err.value) and message in str(err.value)
+
+
+def test_a_missing_drone_model_file_is_named():
+    with pytest.raises(ConditionTableError, match="nope.yaml: cannot read the drone model's limits"):
+        load_table(TABLE_PATH, "/tmp/nope.yaml")
+
+
 # ----- reading values --------------------------------------------------------------------------------------
 @pytest.mark.parametrize("raw, expected", [
     ("abc", "parameter /drone_battery is 'abc', not a number"),

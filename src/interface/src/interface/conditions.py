@@ -68,6 +68,7 @@ class ConditionTable:
         self.rows, self.path = list(rows), path
         self.sensor_timeout_s, self.drone_max_horizontal_speed = sensor_timeout_s, drone_max_horizontal_speed
         self.gps_timeout_s = gps_timeout_s
+        self.initial_conditions = {}  # the drone model's start-up values of its parameters (over the supervisor's)
 
     def __iter__(self):
         return iter(self.rows)
@@ -167,15 +168,70 @@ def parse_table(data, path="<table>"):
     return ConditionTable([_parse_row(str(name), spec, path) for name, spec in rows.items()], path, **extras)
 
 
-def load_table(path):
-    """Load config/conditions.yaml; ConditionTableError names the file and the key on any problem."""
+# What a drone model's file (config/drone_models/MODEL.yaml) may set: the thresholds and messages of the rows whose
+# limit is the drone's (its top speed, the platform speed it can land on, the wind it can fly in).
+DRONE_TOP_KEYS = {"drone_max_horizontal_speed", "conditions", "initial_conditions"}
+DRONE_ROW_KEYS = set(THRESHOLDS) | {"message"}
+
+
+def apply_drone_model(data, drone, path="<table>", drone_path="<drone model>"):
+    """The condition table's YAML ``data`` with the drone model's ``drone`` laid over it (a new mapping): its
+    drone_max_horizontal_speed and, per existing row, thresholds that replace the row's and a message."""
+    if not isinstance(drone, dict):
+        raise ConditionTableError("%s: must be a mapping with %s" % (drone_path, " and ".join(sorted(DRONE_TOP_KEYS))))
+    unknown = sorted(set(drone) - DRONE_TOP_KEYS)
+    if unknown:
+        raise ConditionTableError("%s: key '%s' is not known; a drone model sets: %s"
+                                  % (drone_path, unknown[0], ", ".join(sorted(DRONE_TOP_KEYS))))
+    merged = dict(data)
+    if "drone_max_horizontal_speed" in drone:
+        merged["drone_max_horizontal_speed"] = drone["drone_max_horizontal_speed"]
+    rows = drone.get("conditions") or {}
+    if not isinstance(rows, dict):
+        raise ConditionTableError("%s: key 'conditions' must be a mapping row -> thresholds" % drone_path)
+    table_rows = dict(data.get("conditions") or {})
+    for name, spec in rows.items():
+        where = "conditions.%s" % name
+        if name not in table_rows:
+            raise ConditionTableError("%s: key '%s' names no row of %s (rows: %s)"
+                                      % (drone_path, where, path, ", ".join(table_rows)))
+        if not isinstance(spec, dict) or not spec or set(spec) - DRONE_ROW_KEYS:
+            raise ConditionTableError("%s: key '%s' may set only %s, got %r"
+                                      % (drone_path, where, ", ".join(sorted(DRONE_ROW_KEYS)), spec))
+        row = dict(table_rows[name])
+        if set(spec) & set(THRESHOLDS):  # the drone's thresholds replace the row's
+            row = {k: v for k, v in row.items() if k not in THRESHOLDS}
+        row.update(spec)
+        table_rows[name] = row
+    merged["conditions"] = table_rows
+    return merged
+
+
+def _read_yaml(path, what):
     try:
         with open(path) as stream:
-            data = yaml.safe_load(stream)
+            return yaml.safe_load(stream)
     except OSError as err:
-        raise ConditionTableError("%s: cannot read the condition table: %s" % (path, err.strerror or err))
+        raise ConditionTableError("%s: cannot read the %s: %s" % (path, what, err.strerror or err))
     except yaml.YAMLError as err:
         raise ConditionTableError("%s: not valid YAML: %s" % (path, err))
+
+
+def load_table(path, drone_model_path=None):
+    """Load config/conditions.yaml, with the drone model's thresholds (config/drone_models/MODEL.yaml) over it if
+    given; ConditionTableError names the file and the key on any problem."""
+    data = _read_yaml(path, "condition table")
+    if drone_model_path:
+        where = "%s + %s" % (path, drone_model_path)
+        drone = _read_yaml(drone_model_path, "drone model's limits")
+        table = parse_table(apply_drone_model(data, drone, path, drone_model_path), where)
+        initial = drone.get("initial_conditions") or {}
+        if not isinstance(initial, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                    for v in initial.values()):
+            raise ConditionTableError("%s: key 'initial_conditions' must map condition parameters to numbers, got %r"
+                                      % (drone_model_path, initial))
+        table.initial_conditions = {str(k): float(v) for k, v in initial.items()}
+        return table
     return parse_table(data, path)
 
 

@@ -98,7 +98,11 @@ def _node_params():
         settings = Settings.from_mapping(private, where)
     except SettingsError as err:
         raise StartupError(str(err))
-    return private["conditions_file"], private["target_lost_state"], settings, values
+    drone_model_file = private.get("drone_model_file")
+    if not isinstance(drone_model_file, str) or not drone_model_file:
+        raise StartupError("%s: required parameter '~drone_model_file' (the drone model's limits, "
+                           "interface/config/drone_models/MODEL.yaml) is missing" % where)
+    return private["conditions_file"], drone_model_file, private["target_lost_state"], settings, values
 
 
 class SupervisorNode:
@@ -112,9 +116,10 @@ class SupervisorNode:
     _recovery_lock = threading.Lock()
 
     def __init__(self, carry_on=False):
-        conditions_file, lost_state, settings, self.params = _node_params()
+        conditions_file, drone_model_file, lost_state, settings, self.params = _node_params()
         try:
-            self.table = load_table(conditions_file)
+            self.table = load_table(conditions_file, drone_model_file)
+            self.params["initial_conditions"] = dict(self.params["initial_conditions"], **self.table.initial_conditions)
         except ConditionTableError as err:
             raise StartupError("supervisor: %s" % err)
         # Every parameter is valid from here on: nothing below may refuse the reset.
@@ -176,7 +181,7 @@ class SupervisorNode:
         if not carry_on:
             self._save()  # a reset's fresh state replaces the previous scenario's at once
         rospy.loginfo("supervisor: %d conditions from %s; answer timeout %g s, auto take-off after %g s, "
-                      "Flag #3 re-checks every %g s x %d", len(self.table), conditions_file,
+                      "Flag #3 re-checks every %g s x %d", len(self.table), self.table.path,
                       settings.answer_timeout_s, settings.idle_takeoff_s, settings.recheck_interval_s,
                       settings.recheck_count)
 

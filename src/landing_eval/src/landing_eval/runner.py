@@ -702,20 +702,22 @@ def repair_bags(bags, timeout=30.0):
     return repaired
 
 
-def plan(scenario_path, realism=None, landing_stack=True, supervisor=True):
+def plan(scenario_path, realism=None, landing_stack=True, supervisor=True, real_time=False):
     """The scenario of ``scenario_path`` as run() flies it, and the roslaunch arguments of its graph: (s, launch).
-    Raises scenario.ScenarioError."""
+    ``real_time``: sim time paced at wall time and never held for a lagging node, as on a real drone (the compute
+    budget is measured so). Raises scenario.ScenarioError."""
     s = scenario_mod.load(scenario_path, realism)
     s["_needs_tracker"] = landing_stack
     s["_supervisor"] = supervisor and landing_stack
     launch = ["interface", "scenario.launch", "landing_stack:=%s" % str(landing_stack).lower(),
               "supervisor:=%s" % str(s["_supervisor"]).lower()] + launch_arguments(s) + \
-        (["station:=true"] if s["fuzz"] else [])  # garbage reaches the operator station's inputs too
+        (["station:=true"] if s["fuzz"] else []) + \
+        (["real_time_factor:=1", "lockstep:=false"] if real_time else [])
     return s, launch
 
 
 def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, supervisor=True, realism=None, split_s=None,
-        warm=None, on_flown=None, launch_config=None):
+        warm=None, on_flown=None, launch_config=None, real_time=False, companions=()):
     """Run one scenario (in the realism profile ``realism`` if given, else the scenario's); returns the
     result dict (also written to out_dir/result.json, whatever happens after the scenario file was read).
     ``split_s``: a new bag every split_s seconds of sim time (0: one bag; None: RECORDER_SPLIT_S for a run
@@ -723,9 +725,11 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
     a reset (the first one starts it), and the graph is left running; raises warm_graph.GraphMismatch, before
     anything is written, when the scenario needs other nodes than that graph runs. ``on_flown()``: called on a warm
     graph once the flight is scored and the graph free for the next scenario, while the recorder still stops.
-    ``launch_config``: roslaunch's configuration of the scenario's graph (warm_graph.launch_config), if read ahead."""
+    ``launch_config``: roslaunch's configuration of the scenario's graph (warm_graph.launch_config), if read ahead.
+    ``real_time``: see plan(). ``companions``: {name: command} of processes that watch the flight (a probe), started
+    in the graph once it is connected, interrupted when the flight ends (each logs to out_dir/NAME.log)."""
     wall_start = time.monotonic()
-    s, launch = plan(scenario_path, realism, landing_stack, supervisor)
+    s, launch = plan(scenario_path, realism, landing_stack, supervisor, real_time)
     config = warm.check_fits(launch_config or warm_graph.launch_config(launch)) if warm is not None else None
     os.makedirs(out_dir, exist_ok=True)
     # Without an operator event the operator chooses the landing mode at once, unless the scenario tests
@@ -803,6 +807,9 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
                 fuzzer = stack.enter_context(IsolatedProcess(fuzz.command(s["fuzz"], out_dir),
                                                              os.path.join(out_dir, "fuzz.log"), ros.master_uri))
                 fuzz.wait_until_ready(out_dir, fuzzer, start_deadline)
+            watchers = [stack.enter_context(IsolatedProcess(command, os.path.join(out_dir, name + ".log"),
+                                                            ros.master_uri)) for name, command in companions.items()] \
+                if companions else []
             # Before the physics runs: reading /proc for a dozen processes took long enough for the simulator to fly
             # 0.1-0.4 s of sim time before the scenario's events at t = 0 were applied.
             start = monitor.sample_resources("start", wall_start)
@@ -831,7 +838,7 @@ def run(scenario_path, out_dir, wall_timeout=None, landing_stack=True, superviso
             # The result needs neither the bag nor the graph any more: they stop side by side while it is
             # scored and this process leaves the graph.
             # (The master stops last, when the stack unwinds: nodes unregister from it as they stop.)
-            for process in ([fuzzer] if fuzzer else []) + ([recorders.current] if recorders.current else []) + \
+            for process in ([fuzzer] if fuzzer else []) + watchers + ([recorders.current] if recorders.current else []) + \
                     ([ros] if warm is None else []):
                 process.interrupt()
             step("flight")
@@ -923,13 +930,15 @@ def main(argv=None):
     parser.add_argument("--realism", choices=("ideal", "realistic", "harsh"), default=None,
                         help="realism profile of the simulated world (default: the scenario's, else realistic); "
                              "single keys the scenario overrides stay overridden")
+    parser.add_argument("--real-time", action="store_true",
+                        help="pace sim time at wall time and never hold it for a lagging node, as a real flight")
     args = parser.parse_args(argv)
     stop_on_sigterm()
     # `kill -USR1 PID` prints where every thread of a run that seems stuck is (to stderr, the run's log).
     faulthandler.register(signal.SIGUSR1, all_threads=True)
     try:
         result = run(args.scenario, args.out, args.wall_timeout, landing_stack=not args.no_landing_stack,
-                     supervisor=not args.no_supervisor, realism=args.realism)
+                     supervisor=not args.no_supervisor, realism=args.realism, real_time=args.real_time)
     except scenario_mod.ScenarioError as err:
         print("run_scenario: %s" % err, file=sys.stderr)
         return 2
