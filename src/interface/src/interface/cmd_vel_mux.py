@@ -8,7 +8,8 @@ is forwarded and the drone holds by itself.
 """
 INPUTS = ("manual", "emergency", "tracking")
 PRIORITY = INPUTS
-# supervisor/mode -> inputs allowed to drive. No mode yet (no supervisor in the graph): all of them.
+# supervisor/mode (the words of landing_msgs/SupervisorMode: test_mode_words.py checks them) -> inputs allowed to
+# drive. No mode yet (no supervisor in the graph): all of them.
 ALLOWED = {
     None: ("manual", "emergency", "tracking"),
     "landing": ("manual", "tracking"),

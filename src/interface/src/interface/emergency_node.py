@@ -18,18 +18,18 @@ from landing_runtime.message_constants import message_constants
 from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, RosRejectionLog, choice_problem, first_problem,
                                       frame_problem, numbers_problem, stamp_problem)
 from landing_runtime.lockstep import LockstepAcker
-from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand
+from landing_msgs.msg import Altimeter, Navdata, PositionXYCommand, SupervisorMode
 from landing_runtime.rospy_node import NodeHandles, direct_publisher, run_node
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 from std_msgs.msg import Empty, String
 
 from .emergency import EmergencyLanding, EmergencySettings, Phase, SettingsError
-from .supervisor import OPERATOR_COMMANDS, Mode
+from .supervisor import OPERATOR_COMMANDS
 from .supervisor_measures import flight_from_navdata
 
 ENGAGE = ("on_mode", "immediately")
-MODES = tuple(mode.value for mode in Mode)
+MODES = message_constants(SupervisorMode)
 NAVDATA_STATES = message_constants(Navdata, "STATE_")
 WORLD_FRAME, BODY_FRAME = "world", "ardrone/base_link"  # docs/conventions.md
 
@@ -126,7 +126,7 @@ class EmergencyNode:
                 self.core.acknowledge(t)
             elif value != self.mode:
                 self.mode = value
-                if value == "emergency":
+                if value == SupervisorMode.EMERGENCY:
                     self.core.activate(t, "supervisor mode emergency")
                 elif self.engage == "on_mode":
                     self.core.deactivate(t, "supervisor mode %s" % value)

@@ -24,7 +24,7 @@ from geometry_msgs.msg import PointStamped
 from landing_runtime.message_constants import message_constants
 from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPEED_MPS, RosRejectionLog, choice_problem,
                                       first_problem, frame_problem, numbers_problem, stamp_problem)
-from landing_msgs.msg import Altimeter, PositionXYCommand, PreflightStatus, TrackerState
+from landing_msgs.msg import Altimeter, PositionXYCommand, PreflightStatus, SupervisorMode, TrackerState
 from landing_runtime.rospy_node import init_node
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Range
@@ -38,9 +38,8 @@ from .station_manual import ManualControl
 from .station_model import StationModel, translate_odometry, translate_path, translate_point
 from .station_protocol import CONDITIONS
 from .station_server import StationServer
-from .supervisor import Mode
 
-MODES = tuple(mode.value for mode in Mode)
+MODES = message_constants(SupervisorMode)
 MAX_CAMERA_LATENCY_S = 10.0  # a camera latency beyond this is garbage, not a link [s]
 TRACKER_STATES = message_constants(TrackerState)
 
