@@ -69,7 +69,7 @@ def test_the_probe_reads_the_stamp_of_a_serialised_header():
 
 def test_the_budget_counts_the_stack_apart_from_the_simulator_and_the_recorder():
     pytest.importorskip("rospy")
-    from landing_bench.compute_budget import budget, probe_command, render
+    from landing_bench.compute_budget import budget, probe_command, render, table
 
     def sample(sim_s, cpu):
         return {"sim_s": sim_s, "nodes": {name: {"pid": 1, "cpu_s": v} for name, v in cpu.items()}}
@@ -81,6 +81,10 @@ def test_the_budget_counts_the_stack_apart_from_the_simulator_and_the_recorder()
     assert figures["cpu_stack_total"] == pytest.approx(0.1)
     assert set(figures["cpu_not_the_stack"]) == {"mujoco_sim", "flight_recorder"}
     assert "no complete chain" in render(figures)
+    figures["drone_model"] = "ardrone2"
+    text = table([figures])
+    assert "| CPU `platform_tracking` [s/s] | 0.060 |" in text and "| **CPU, the stack in all** [s/s] | **0.100** |" in text
+    assert "frame -> drone command** p50 / p99 [ms] | - |" in text  # no latency measured: said, not zero
     assert "drone_command:=/cmd_vel" in probe_command("/tmp/l.json", "ardrone2")
     with pytest.raises(ValueError, match="no command topic known for drone model 'bebop'"):
         probe_command("/tmp/l.json", "bebop")

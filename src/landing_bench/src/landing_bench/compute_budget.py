@@ -1,9 +1,11 @@
-"""The stack's compute budget as a companion computer would see it: one scenario flown at real time.
+"""The stack's compute budget as a companion computer would see it: scenarios flown at real time.
 
-    rosrun landing_bench compute_budget scenarios/stress/ardrone2/summit_circle_1ms.yaml --out DIR
+    rosrun landing_bench compute_budget scenarios/stress/ardrone2/summit_circle_1ms.yaml [MORE.yaml] --out DIR \
+        [--readme README.md]
 
-The scenario flies with sim time paced at wall time and never held for a lagging node (run_scenario --real-time),
-as on the real drone. Prints and writes to DIR/compute_budget.json:
+Each scenario flies, one after the other, with sim time paced at wall time and never held for a lagging node
+(run_scenario --real-time), as on the real drone. Prints, and writes to DIR/<set>_<scenario>/compute_budget.json
+(with --readme, a column per scenario into the README's budget block):
 - the CPU seconds each node of the stack used per second of flight, from /proc over the flight (the simulator, the
   bag recorder, the vehicle's path driver and the ROS master/rosout are listed apart: on the real system they are the
   world, the log and the vehicle, not the drone's companion computer);
@@ -31,6 +33,7 @@ NOT_THE_STACK = {"mujoco_sim": "simulator", "flight_recorder": "bag recorder", "
 CHAIN_TOPICS = {"image": "/ardrone/bottom/image_raw", "detection": "/platform/current_platform_position_in_ardrone",
                 "estimate": "/kalman_platform_odom", "stack_command": "/platform_tracking/cmd_vel"}
 DRONE_COMMAND = {"ardrone2": "/cmd_vel", "velocity_quad": "/ardrone/cmd_vel"}
+README_MARKERS = ("<!-- budget:start -->", "<!-- budget:end -->")
 
 
 def probe_command(out_path, drone_model):
@@ -77,31 +80,90 @@ def render(figures):
     return "\n".join(lines)
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("scenario", help="scenario YAML (e.g. scenarios/stress/ardrone2/summit_circle_1ms.yaml)")
-    parser.add_argument("--out", required=True, help="output directory (the run, latency.json, compute_budget.json)")
-    args = parser.parse_args(argv)
+def table(all_figures):
+    """A markdown table of several flights' budgets, a column per flight: CPU per stack node, the whole stack, the
+    simulator for scale, the latency's p50/p99 and the real-time factor kept."""
+    heads = ["%s (%s)" % (f["scenario"], f["drone_model"]) for f in all_figures]
+    nodes = []
+    for f in all_figures:
+        nodes += [n for n in f["cpu_per_flight_s"] if n not in nodes]
+
+    def cell(value, fmt):
+        return "-" if value is None else fmt % value
+    rows = [["CPU `%s` [s/s]" % n] + [cell(f["cpu_per_flight_s"].get(n), "%.3f") for f in all_figures] for n in nodes]
+    rows.append(["**CPU, the stack in all** [s/s]"] + ["**%.3f**" % f["cpu_stack_total"] for f in all_figures])
+    rows.append(["CPU, the simulator (not the stack) [s/s]"] +
+                [cell(f["cpu_not_the_stack"].get("mujoco_sim"), "%.3f") for f in all_figures])
+    for stage, label in (("total", "**frame -> drone command** p50 / p99 [ms]"),
+                         ("detection", "frame -> detection p50 / p99 [ms]"),
+                         ("estimate", "detection -> pad estimate p50 / p99 [ms]"),
+                         ("stack_command", "pad estimate -> tracker command p50 / p99 [ms]"),
+                         ("drone_command", "tracker command -> drone command p50 / p99 [ms]")):
+        row = [label]
+        for f in all_figures:
+            latency = (f["latency"] or {}).get(stage) or {}
+            row.append("-" if latency.get("p50_ms") is None else "%.1f / %.1f" % (latency["p50_ms"], latency["p99_ms"]))
+        rows.append(row)
+    rows.append(["frames with the pad / chains measured"] +
+                ["%s / %s" % ((f["latency"] or {}).get("detected", "-"), (f["latency"] or {}).get("chains", "-"))
+                 for f in all_figures])
+    rows.append(["real-time factor kept, outcome"] + ["%s, %s" % (f["real_time_factor"], f["outcome"])
+                                                      for f in all_figures])
+    lines = ["| | " + " | ".join(heads) + " |", "|---" * (len(heads) + 1) + "|"]
+    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
+
+
+def fly(scenario_path, out_dir):
+    """One scenario at real time with the probe beside it: its figures (budget()), or raises RuntimeError."""
     try:
-        model = scenario_mod.load(args.scenario)["drone"]["model"]
-        probe = probe_command(os.path.join(os.path.abspath(args.out), "latency.json"), model)
+        model = scenario_mod.load(scenario_path)["drone"]["model"]
+        probe = probe_command(os.path.join(os.path.abspath(out_dir), "latency.json"), model)
     except (scenario_mod.ScenarioError, ValueError) as err:
-        print("compute_budget: %s" % err, file=sys.stderr)
-        return 2
-    runner.stop_on_sigterm()
-    result = runner.run(args.scenario, args.out, real_time=True, companions={"latency_probe": probe})
+        raise RuntimeError(str(err))
+    result = runner.run(scenario_path, out_dir, real_time=True, companions={"latency_probe": probe})
     if result["outcome"] == "aborted":
-        print("compute_budget: the flight aborted: %s (logs in %s)" % (result.get("error"), args.out), file=sys.stderr)
-        return 3
+        raise RuntimeError("%s: the flight aborted: %s (logs in %s)" % (scenario_path, result.get("error"), out_dir))
     try:
-        with open(os.path.join(args.out, "latency.json")) as stream:
+        with open(os.path.join(out_dir, "latency.json")) as stream:
             latency = json.load(stream)
     except (OSError, ValueError) as err:
         print("compute_budget: the latency probe left no figures (%s); see %s" % (
-            err, os.path.join(args.out, "latency_probe.log")), file=sys.stderr)
+            err, os.path.join(out_dir, "latency_probe.log")), file=sys.stderr)
         latency = None
-    figures = budget(result, latency)
-    with open(os.path.join(args.out, "compute_budget.json"), "w") as stream:
+    figures = dict(budget(result, latency), drone_model=model)
+    with open(os.path.join(out_dir, "compute_budget.json"), "w") as stream:
         json.dump(figures, stream, indent=1)
-    print(render(figures))
+    return figures
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("scenarios", nargs="+",
+                        help="scenario YAML files, flown one after the other (e.g. "
+                             "scenarios/stress/ardrone2/summit_circle_1ms.yaml scenarios/summit_circle_1ms.yaml)")
+    parser.add_argument("--out", required=True, help="output directory: a sub-directory per scenario (the run, "
+                                                     "latency.json, compute_budget.json)")
+    parser.add_argument("--readme", default=None, help="README whose budget block gets this run's table")
+    args = parser.parse_args(argv)
+    runner.stop_on_sigterm()
+    all_figures = []
+    for path in args.scenarios:
+        name = os.path.splitext(os.path.basename(path))[0]
+        model_dir = os.path.basename(os.path.dirname(os.path.abspath(path)))
+        try:
+            figures = fly(path, os.path.join(args.out, "%s_%s" % (model_dir, name)))
+        except RuntimeError as err:
+            print("compute_budget: %s" % err, file=sys.stderr)
+            return 3
+        print(render(figures) + "\n")
+        all_figures.append(figures)
+    if args.readme:
+        from landing_eval.benchmark import provenance, update_readme
+        import datetime
+        import platform
+        commit, command = provenance("rosrun landing_bench compute_budget")
+        heading = "%s at commit `%s` (%s, %d cores, other work on the machine): `%s`" % (
+            datetime.date.today().isoformat(), commit, platform.machine(), os.cpu_count(), command)
+        update_readme(args.readme, heading, table(all_figures), markers=README_MARKERS)
+        print("compute_budget: the table is in %s" % args.readme)
     return 0

@@ -218,7 +218,7 @@ def spread(rows):
     return "\n".join(lines)
 
 
-def provenance():
+def provenance(command_name="rosrun landing_eval benchmark"):
     """(commit, command line) of this run: the short hash of the workspace's HEAD, '-dirty' with
     uncommitted changes to tracked files; the command as typed."""
     here = os.path.dirname(os.path.abspath(__file__))
@@ -229,7 +229,7 @@ def provenance():
                                capture_output=True, text=True, timeout=30).stdout.strip()
     except (OSError, subprocess.TimeoutExpired):
         commit, dirty = "unknown", ""
-    command = "rosrun landing_eval benchmark " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    command = command_name + " " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     return commit + ("-dirty" if dirty else ""), command
 
 
@@ -257,16 +257,16 @@ def write_summary(rows, out_dir, heading):
 README_START, README_END = "<!-- bench:start -->", "<!-- bench:end -->"
 
 
-def update_readme(readme, heading, text):
-    """Replace the block between the bench markers of ``readme`` with this run's table."""
+def update_readme(readme, heading, text, markers=(README_START, README_END)):
+    """Replace the block between the ``markers`` (the bench markers by default) of ``readme`` with this run's table."""
+    start, end = markers
     with open(readme) as stream:
         content = stream.read()
-    if README_START not in content or README_END not in content:
-        raise ValueError("%s has no %s ... %s block to replace" % (readme, README_START, README_END))
-    head, rest = content.split(README_START, 1)
+    if start not in content or end not in content:
+        raise ValueError("%s has no %s ... %s block to replace" % (readme, start, end))
+    head, rest = content.split(start, 1)
     with open(readme, "w") as stream:
-        stream.write("%s%s\n%s\n\n%s\n%s%s" % (head, README_START, heading, text, README_END,
-                                                rest.split(README_END, 1)[1]))
+        stream.write("%s%s\n%s\n\n%s\n%s%s" % (head, start, heading, text, end, rest.split(end, 1)[1]))
 
 
 def _interrupt_on_sigterm():

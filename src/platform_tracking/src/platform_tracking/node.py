@@ -48,6 +48,7 @@ from landing_runtime.input_check import (MAX_ALTITUDE_M, MAX_POSITION_M, MAX_SPE
                                          choice_problem, numbers_problem, stamp_problem)
 from landing_runtime.lockstep import LockstepAcker
 from landing_runtime.message_check import WORLD_FRAME, header_problem, odometry_problem, sonar_problem, stamp_of
+from landing_runtime.message_constants import message_constants
 from landing_runtime.params import ParamError, load_params
 from landing_runtime.rospy_node import NodeHandles, direct_publisher, run_node
 from nav_msgs.msg import Odometry, Path
@@ -68,7 +69,8 @@ COMMANDS = ("takeoff", "land", "force_land", "hold")
 BODY_FRAME = "ardrone/base_link"  # the drone's body frame (docs/conventions.md): sonar and relative pad positions
 
 
-NAVDATA_STATES = tuple(range(11))  # landing_msgs/Navdata state codes (state_machine.Nav)
+NAVDATA_STATES = message_constants(Navdata, "STATE_")  # the navdata state codes the message defines
+NO_PREFLIGHT = "no pre-flight check heard (start interface's preflight node)"
 
 
 def build_prediction(path, odom):
@@ -113,8 +115,8 @@ class TrackingNode:
         self.requests = []            # operator requests since the last step, in arrival order
         self.landing_allowed = True
         # With require_preflight, a take-off waits for the pre-flight check's word (none heard: it waits too).
-        self.preflight_blocks = "no pre-flight check heard (start interface's preflight node)" \
-            if self.params.require_preflight else None
+        self.preflight_blocks = NO_PREFLIGHT if self.params.require_preflight else None
+        self.preflight_heard_at = None  # when its latest verdict arrived (sim time)
         self.seen_at = None           # when the latest pad detection arrived (sim time; its image is older)
         self.camera_latency = CameraLatency(DELAY_SAMPLES, LATENCY_PERIOD)  # of the detections' arrival
         # A latency due for platform_tracking/camera_latency, published by the next tick: a callback publishing it
@@ -281,8 +283,21 @@ class TrackingNode:
         if problem:
             return self.rejections.reject("preflight/status", problem)
         with self.lock:
+            self.preflight_heard_at = rospy.get_time()
             self.preflight_blocks = None if msg.ready else "; ".join(
                 line for line in msg.items if not line.endswith(": ok")) or "not ready"
+
+    def _takeoff_blocked(self, t):
+        """Why a take-off must wait for the pre-flight check (None: it may go): its latest verdict, unless that
+        is older than preflight_max_age (the check's node died: its last word no longer holds)."""
+        if not self.params.require_preflight:
+            return None
+        if self.preflight_heard_at is None:
+            return NO_PREFLIGHT
+        age = t - self.preflight_heard_at
+        if age > self.params.preflight_max_age:
+            return "the pre-flight check's latest verdict is %.1f s old (is interface's preflight node running?)" % age
+        return self.preflight_blocks
 
     def on_command(self, msg):
         command = msg.data.strip().lower()
@@ -347,7 +362,7 @@ class TrackingNode:
             inputs = Inputs(t, drone, self._pad_prediction(), self.navdata_state,
                             takeoff="takeoff" in requests, land="land" in requests,
                             force_land="force_land" in requests, landing_allowed=self.landing_allowed,
-                            takeoff_blocked=self.preflight_blocks,
+                            takeoff_blocked=self._takeoff_blocked(t),
                             vision_age=None if self.seen_at is None else t - self.seen_at, flow_weight=flow_weight,
                             camera_latency=self.camera_latency.value, relative=self.relative.at(t))
         if latency is not None:

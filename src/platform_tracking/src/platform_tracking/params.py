@@ -50,6 +50,7 @@ class TrackingParams:
     auto_land: bool = spec(True)
     autostart: bool = spec(False)
     require_preflight: bool = spec(False)
+    preflight_max_age: float = spec(3.0, 0.5, 60.0, "s")
     min_tracking_time: float = spec(10.0, 0.0, 600.0, "s")
     settle_error: float = spec(0.3, 0.01, 10.0, "m")
     settle_time: float = spec(1.0, 0.0, 60.0, "s")
