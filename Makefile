@@ -9,7 +9,8 @@ JOBS ?= 2
 
 # Debian's own ROS 1 (catkin, roscore, roslaunch, rostest, rosbag), OpenCV, Eigen, offscreen Mesa; aiohttp for the
 # web operator station, headless Chromium + chromium-driver + Selenium for its browser tests; rosbag_storage,
-# topic_tools and jemalloc for the flight recorder (flight_recorder, interface/launch/record.launch).
+# topic_tools and jemalloc for the flight recorder (flight_recorder, interface/launch/record.launch); libapriltag
+# for the AprilTag pad's detector (uav_vision).
 APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip python3-yaml python3-numpy python3-pytest \
   catkin ros-base-dev python3-rospy python3-roslaunch python3-rostest python3-rosbag python3-rosnode \
   python3-rostopic python3-rosparam python3-rosservice python3-rosgraph rosbash ros-message-generation \
@@ -19,7 +20,8 @@ APT_PACKAGES := build-essential cmake python3-venv python3-dev python3-pip pytho
   libtf2-geometry-msgs-dev python3-tf2-geometry-msgs libopencv-dev python3-opencv libeigen3-dev \
   libgtest-dev googletest libosmesa6 libgl1 libglfw3 rviz \
   python3-std-srvs libstd-srvs-dev libyaml-cpp-dev \
-  python3-aiohttp chromium chromium-driver python3-selenium libjemalloc2 librosbag-storage-dev libtopic-tools-dev
+  python3-aiohttp chromium chromium-driver python3-selenium libjemalloc2 librosbag-storage-dev libtopic-tools-dev \
+  libapriltag-dev
 
 .PHONY: all deps build test check demo bench clean
 
@@ -52,10 +54,10 @@ $(STAMPS)/pth: Makefile $(STAMPS)/venv
 
 deps: $(STAMPS)/venv $(STAMPS)/pth
 
-# The message-only stand-ins for the drivers' interfaces (src/ardrone_autonomy) are built only where the real
-# package is not installed: a real one in /opt/ros, /usr/share or a sourced underlay (CMAKE_PREFIX_PATH) wins,
-# and the stand-in gets a CATKIN_IGNORE.
-STANDINS := ardrone_autonomy
+# The message-only stand-ins for the drivers' interfaces (src/ardrone_autonomy, src/mavros_msgs) are built only
+# where the real package is not installed: a real one in /opt/ros, /usr/share or a sourced underlay
+# (CMAKE_PREFIX_PATH) wins, and the stand-in gets a CATKIN_IGNORE.
+STANDINS := ardrone_autonomy mavros_msgs
 build: deps
 	@for pkg in $(STANDINS); do \
 	  real=""; for prefix in /opt/ros/* /usr $$(echo "$${CMAKE_PREFIX_PATH:-}" | tr ':' ' '); do \

@@ -17,7 +17,7 @@ sys.path[:0] = [os.path.join(ROOT, "src", "landing_eval", "src"), os.path.join(R
 from flight_analysis.analysis_bag import read_bag  # noqa: E402
 from landing_eval import processes  # noqa: E402
 from landing_eval.isolated_ros import IsolatedCore, IsolatedLaunch, IsolatedProcess  # noqa: E402
-from landing_eval.runner import RECORDER, recorder_command  # noqa: E402
+from landing_eval.recorders import RECORDER, recorder_command  # noqa: E402
 
 RELIABILITY = os.path.join(ROOT, "scenarios", "reliability")
 SAFE = ("landed_on_pad", "emergency_landed", "timeout")  # on the pad, an emergency landing, or still flying

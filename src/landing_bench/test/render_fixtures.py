@@ -13,10 +13,13 @@ sensors would read there:
 - ``realistic`` (src/uav_vision/test/data/rendered_realistic): the ``realistic`` profile (lens distortion, the sun's
   shadows of the drone and the vehicle, motion blur, exposure wander) and a few ``harsh`` frames, each
   frame chosen for what it shows (see REALISTIC). The profile's sensor noise is left out of the PNGs
-  (it would make each ten times larger) and recorded in pixel_noise_std_omitted for the test to add.
+  (it would make each ten times larger) and recorded in pixel_noise_std_omitted for the test to add;
+- ``apriltag`` (src/uav_vision/test/data/rendered_apriltag): the AprilTag pad (mujoco_sim.pads) in the ``realistic``
+  profile from 6 m down to 0.3 m, in the drone's shadow, blurred, with the foreign pad (other tag ids) and the red
+  false target in view, and frames without it (see APRILTAG); read by apriltag_fixtures_test.cpp.
 Poses come from fixed seeds, so re-running gives the same files. After `source env.sh`, from the workspace:
 
-    MUJOCO_GL=osmesa python src/landing_bench/test/render_fixtures.py [--set ideal|realistic|all]
+    MUJOCO_GL=osmesa python src/landing_bench/test/render_fixtures.py [--set ideal|realistic|apriltag|all]
 
 then `catkin_make run_tests_uav_vision_gtest_uav_vision_detector_test` reads them.
 """
@@ -30,7 +33,8 @@ from landing_bench.rendered_frames import FrameRenderer, View, save_png, write_t
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 FIXTURES = os.path.realpath(os.path.join(HERE, "..", "..", "uav_vision", "test", "data"))  # uav_vision's
-OUT = {"ideal": os.path.join(FIXTURES, "rendered"), "realistic": os.path.join(FIXTURES, "rendered_realistic")}
+OUT = {"ideal": os.path.join(FIXTURES, "rendered"), "realistic": os.path.join(FIXTURES, "rendered_realistic"),
+       "apriltag": os.path.join(FIXTURES, "rendered_apriltag")}
 
 # (band, number of images, camera height range above the pad [m], horizontal camera offset from the pad
 # centre [m], maximum tilt [deg], vehicle). Low passes see the pad partly; high ones see all of it.
@@ -189,18 +193,76 @@ def render_realistic(out):
     return rows
 
 
+# The AprilTag pad's set: (label, renderer key, view arguments), renderer keys as REALISTIC's. Labels: whole (the pad
+# whole in view, 1.2-6 m), inner (the inner tag alone, 0.3-0.9 m), shadow, blur, foreign (the foreign pad beside the
+# vehicle in view, with the pad), foreign_alone (the foreign pad without the pad), red (the red false target), none, car.
+TAGS = ("summit_xl", "realistic", 201, {})
+TAGS_2 = ("summit_xl", "realistic", 202, {})
+TAGS_HIGH_SUN = ("summit_xl", "realistic", 203, {"sun_elevation_deg": 63.0, "sun_elevation_spread_deg": 0.0})
+TAGS_CAR = ("car", "realistic", 204, {})
+APRILTAG = [
+    ("whole", TAGS, dict(camera_offset=(0.4, -0.3), camera_height=6.0, roll=0.05, pitch=-0.08, yaw=0.4, **DRIFT)),
+    ("whole", TAGS, dict(camera_offset=(-0.8, 0.6), camera_height=5.0, roll=-0.1, pitch=0.05, yaw=2.1, **DRIFT)),
+    ("whole", TAGS_2, dict(camera_offset=(0.2, 0.5), camera_height=4.0, roll=0.12, pitch=0.1, yaw=-1.2)),
+    ("whole", TAGS_2, dict(camera_offset=(0.0, 0.3), camera_height=2.5, pitch=0.1, yaw=-2.6, **DRIFT)),
+    ("whole", TAGS, dict(camera_offset=(0.1, -0.05), camera_height=1.4, yaw=0.9, **DRIFT)),
+    ("corner", TAGS_2, dict(camera_offset=offset_for_pixel(60, 45, 4.0, yaw=2.5), camera_height=4.0, yaw=2.5)),
+    ("inner", TAGS, dict(camera_offset=(0.03, -0.02), camera_height=0.9, yaw=0.9, **DRIFT)),
+    ("inner", TAGS_2, dict(camera_offset=(-0.05, 0.04), camera_height=0.6, roll=0.08, yaw=-0.3)),
+    ("inner", TAGS, dict(camera_offset=(0.02, 0.01), camera_height=0.4, yaw=2.0, **DRIFT)),
+    ("inner", TAGS_2, dict(camera_offset=(0.01, -0.02), camera_height=0.3, yaw=-1.4)),
+    ("shadow", TAGS_HIGH_SUN, dict(camera_height=1.6, jitter=(0.0, 0.0), yaw=0.3, **DRIFT)),
+    ("shadow", TAGS_HIGH_SUN, dict(camera_height=2.4, jitter=(0.3, 0.2), yaw=1.9)),
+    ("shadow", TAGS_HIGH_SUN, dict(camera_height=0.6, jitter=(0.0, 0.05), tilt_towards_pad=15.0, yaw=-1.0)),
+    ("blur", TAGS, dict(camera_offset=(0.2, 0.1), camera_height=2.0, yaw=0.7,
+                        relative_velocity=(1.0, 0.5, -0.2), body_rates=(0.4, -0.3, 0.2))),
+    ("foreign", TAGS, dict(camera_offset=(0.0, -0.9), camera_height=3.5, yaw=0.0, false_target=True,
+                           foreign_pad=True, **DRIFT)),
+    ("foreign_alone", TAGS_2, dict(camera_offset=(0.0, -1.8), camera_height=1.6, yaw=0.5, false_target=True,
+                                   foreign_pad=True)),
+    ("foreign_alone", TAGS, dict(camera_offset=(0.3, -1.8), camera_height=3.0, yaw=-2.0, false_target=True,
+                                 foreign_pad=True, **DRIFT)),
+    ("red", TAGS_2, dict(camera_offset=(-0.2, 1.6), camera_height=2.0, yaw=1.3, false_target=True)),
+    ("none", TAGS, dict(camera_offset=(3.0, -2.0), camera_height=2.5, yaw=0.8, **DRIFT)),
+    ("car", TAGS_CAR, dict(camera_offset=(0.2, 0.3), camera_height=2.5, roll=0.08, yaw=1.4, vehicle_speed=10.0,
+                           **DRIFT)),
+    ("car", TAGS_CAR, dict(camera_offset=(-0.02, 0.03), camera_height=0.5, yaw=-0.6, vehicle_speed=10.0)),
+]
+
+
+def render_apriltag(out):
+    """The AprilTag pad's set: each frame of APRILTAG, the profile's sensor noise left to the test."""
+    renderers, rows = {}, []
+    for index, (label, key, arguments) in enumerate(APRILTAG):
+        vehicle, profile, seed, overrides = key
+        if seed not in renderers:
+            renderers[seed] = FrameRenderer(vehicle, profile, seed, overrides, omit_pixel_noise=True, pad="apriltag")
+        renderer = renderers[seed]
+        if "jitter" in arguments:
+            arguments = shadow_view(renderer, arguments)
+        view = View(band=label, vehicle_position=(0.5, -0.5), **arguments)
+        renderer.set_view(view)
+        name = "%02d_%s_%s_h%03d.png" % (index, label, key[0], int(round(view.camera_height * 100)))
+        image, row = renderer.render(name)
+        save_png(os.path.join(out, name), image)
+        rows.append(row)
+    for renderer in renderers.values():
+        renderer.close()
+    return rows
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--set", choices=("ideal", "realistic", "all"), default="all")
+    parser.add_argument("--set", choices=("ideal", "realistic", "apriltag", "all"), default="all")
     parser.add_argument("--out", help="directory to write to instead of src/uav_vision/test/data/<set> (one set only)")
     args = parser.parse_args()
-    sets = ("ideal", "realistic") if args.set == "all" else (args.set,)
+    sets = ("ideal", "realistic", "apriltag") if args.set == "all" else (args.set,)
     if args.out and len(sets) > 1:
-        parser.error("--out needs --set ideal or --set realistic")
+        parser.error("--out needs --set ideal, realistic or apriltag")
     for name in sets:
         out = args.out or OUT[name]
         os.makedirs(out, exist_ok=True)
-        rows = {"ideal": render_ideal, "realistic": render_realistic}[name](out)
+        rows = {"ideal": render_ideal, "realistic": render_realistic, "apriltag": render_apriltag}[name](out)
         write_truth(os.path.join(out, "truth.csv"), rows)
         print("wrote %d images and truth.csv to %s" % (len(rows), out))
 

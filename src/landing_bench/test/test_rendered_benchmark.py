@@ -34,3 +34,30 @@ def test_an_unknown_kind_of_view_is_refused_with_the_choices(capsys):
         rendered_benchmark.main(["--views", "sideways"])
     assert exit_.value.code == 2
     assert "approach" in capsys.readouterr().err
+
+
+def test_the_apriltag_pad_views_reach_six_metres_and_bring_the_foreign_pad():
+    class _TagRenderer:
+        vehicle, pad = "summit_xl", "apriltag"
+        towards_sun = np.array([0.3, 0.2, 0.93])
+    rng = np.random.default_rng(5)
+    views = [rendered_benchmark.sample_view(rng, _TagRenderer()) for _ in range(600)]
+    assert max(v.camera_height for v in views) > 5.5
+    share = np.mean([v.foreign_pad for v in views])
+    assert 0.25 < share < 0.42
+    # The red square's views: up to 5 m, no foreign pad.
+
+    class _RedRenderer(_TagRenderer):
+        pad = "red_square"
+    rng = np.random.default_rng(5)
+    red = [rendered_benchmark.sample_view(rng, _RedRenderer()) for _ in range(200)]
+    assert not any(v.foreign_pad for v in red) and max(v.camera_height for v in red) <= 5.0
+
+
+def test_a_short_apriltag_run_prints_the_apriltag_figures(capfd):
+    status = rendered_benchmark.main(["--frames", "4", "--pad", "apriltag", "--profiles", "realistic", "--worst", "0"])
+    out = capfd.readouterr().out
+    assert status == 0, out
+    assert "views of the apriltag pad" in out
+    assert "AprilTag pad (4 frames)" in out and "false detections, foreign pad in view" in out
+    assert "targets (issue 44, AprilTag pad)" in out

@@ -12,7 +12,7 @@ from types import SimpleNamespace
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
-from landing_eval import benchmark, missions, processes, runner, scenario  # noqa: E402
+from landing_eval import benchmark, missions, processes, recorders, scenario  # noqa: E402
 
 
 def touchdown(t, surface=1, crashed=False, pad_error=0.05):
@@ -175,6 +175,6 @@ def test_the_bags_of_a_split_recording_are_found_in_their_order_with_the_names_t
                  "flight.2_0.bag"):
         (tmp_path / name).write_bytes(b"")
     stem = str(tmp_path / "flight")
-    assert runner.split_bags(stem + ".bag") == [stem + "_0.bag", stem + "_1.bag", stem + "_2.bag", stem + "_10.bag"]
-    assert runner.split_bags(stem + ".2.bag") == [stem + ".2_0.bag"]
-    assert runner.split_bags(str(tmp_path / "none.bag")) == []
+    assert recorders.split_bags(stem + ".bag") == [stem + "_0.bag", stem + "_1.bag", stem + "_2.bag", stem + "_10.bag"]
+    assert recorders.split_bags(stem + ".2.bag") == [stem + ".2_0.bag"]
+    assert recorders.split_bags(str(tmp_path / "none.bag")) == []

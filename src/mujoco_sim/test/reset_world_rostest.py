@@ -14,7 +14,7 @@ from landing_runtime import testing
 from landing_msgs.msg import Navdata
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Image, Imu, Range
+from sensor_msgs.msg import Image, Imu, NavSatFix, Range
 from std_msgs.msg import Empty
 from std_srvs.srv import Trigger
 
@@ -34,7 +34,8 @@ CONTENT = {
     "/drone/navdata": (Navdata, lambda m: (m.state, m.battery_percent, m.altitude, m.vx, m.vy, m.rot_z)),
     "/ardrone/sonar_height": (Range, lambda m: m.range),
     "/ardrone/gps/odom": (Odometry, lambda m: _position(m.pose.pose)),
-    "/summit_xl/gps/odom": (Odometry, lambda m: _position(m.pose.pose)),
+    "/summit_xl/gps/fix": (NavSatFix, lambda m: (m.status.status, m.latitude, m.longitude)),
+    "/robotnik_base_control/odom": (Odometry, lambda m: _position(m.pose.pose)),
     "/ardrone/ground_truth/state": (Odometry, lambda m: _position(m.pose.pose)),
     "/ardrone/bottom/image_raw": (Image, lambda m: hashlib.sha1(m.data).hexdigest()),
 }

@@ -10,7 +10,7 @@ import tf2_ros
 from geometry_msgs.msg import Twist
 from landing_msgs.msg import Altimeter, Navdata, Touchdown
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, Range
+from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, NavSatFix, Range
 from std_msgs.msg import Empty
 from landing_runtime import testing
 
@@ -20,7 +20,9 @@ RATES = {  # topic: (type, expected rate in sim time [Hz])
     "/ardrone/bottom/camera_info": (CameraInfo, 30.0), "/ardrone/sonar_height": (Range, 25.0),
     "/ardrone/altimeter": (Altimeter, 20.0), "/drone/navdata": (Navdata, 50.0),
     "/ardrone/gps/odom": (Odometry, 5.0), "/ardrone/ground_truth/state": (Odometry, 50.0),
-    "/summit_xl/joint_states": (JointState, 50.0), "/summit_xl/gps/odom": (Odometry, 5.0),
+    "/summit_xl/joint_states": (JointState, 50.0),
+    # the vehicle's real interfaces: its GPS receiver (a NO_FIX in a dropout, without vel) and its controller's odometry
+    "/summit_xl/gps/fix": (NavSatFix, 5.0), "/robotnik_base_control/odom": (Odometry, 50.0),
 }
 
 

@@ -5,8 +5,21 @@
 
 namespace uav_vision {
 
+const char* toString(PadKind kind) { return kind == PadKind::kAprilTag ? "apriltag" : "red_square"; }
+
+std::optional<PadKind> padKindFromString(const std::string& name) {
+  if (name == "red_square") return PadKind::kRedSquare;
+  if (name == "apriltag") return PadKind::kAprilTag;
+  return std::nullopt;
+}
+
 PadLocalizer::PadLocalizer(const PadLocalizerParams& params, const CameraMount& mount)
-    : params_(params), mount_(mount), detector_(params.detector), height_estimator_(params.height) {}
+    : params_(params),
+      mount_(mount),
+      detector_(params.detector),
+      apriltag_(params.pad == PadKind::kAprilTag ? std::make_shared<const AprilTagPadDetector>(params.apriltag)
+                                                 : nullptr),
+      height_estimator_(params.height) {}
 
 Surface PadLocalizer::surfaceUnderSonar(const Detection& detection, const CameraIntrinsics& intrinsics,
                                         double sonar_half_angle) const {
@@ -41,6 +54,24 @@ void PadLocalizer::locate(const PlaneView& view, PadObservation& observation) co
       observation.pad_yaw = std::atan2(forward.y(), forward.x());
     }
   }
+  if (d.pose_found) {
+    const Eigen::Vector3d in_camera(d.pad_in_camera[0], d.pad_in_camera[1], d.pad_in_camera[2]);
+    const Eigen::Vector3d forward_in_camera(d.pad_axes_in_camera(0, 0), d.pad_axes_in_camera(1, 0),
+                                            d.pad_axes_in_camera(2, 0));
+    observation.tag_pose_found = true;
+    observation.tag_centre_in_body = mount_.optical_in_body * in_camera + mount_.position_in_body;
+    if (apriltag_) {
+      // The tags' pose: centre and heading point in base_link, turned into world axes by the IMU attitude.
+      const Eigen::Vector3d heading_in_camera = in_camera + params_.apriltag.heading_offset * forward_in_camera;
+      observation.centre_in_body = observation.tag_centre_in_body;
+      observation.centre_world_aligned = view.worldFromBody() * observation.centre_in_body;
+      observation.strip_found = true;
+      observation.strip_in_body = mount_.optical_in_body * heading_in_camera + mount_.position_in_body;
+      observation.strip_world_aligned = view.worldFromBody() * observation.strip_in_body;
+      const Eigen::Vector3d forward = observation.strip_world_aligned - observation.centre_world_aligned;
+      observation.pad_yaw = std::atan2(forward.y(), forward.x());
+    }
+  }
 }
 
 PadObservation PadLocalizer::observeAtHeight(const cv::Mat& image, ColorOrder order,
@@ -54,7 +85,7 @@ PadObservation PadLocalizer::observeAtHeight(const cv::Mat& image, ColorOrder or
     observation.reason = view.problem();
     return observation;
   }
-  observation.detection = detector_.detect(image, order, &view);
+  observation.detection = apriltag_ ? apriltag_->detect(image, order, &view) : detector_.detect(image, order, &view);
   locate(view, observation);
   return observation;
 }

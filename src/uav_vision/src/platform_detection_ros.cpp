@@ -111,6 +111,40 @@ PlatformDetectionConfig PlatformDetectionConfig::load(const ros::NodeHandle& pnh
     throw ConfigError("parameters '" + pnh.resolveName("frames") + "/base' and '/world' must not be empty");
   if (const std::string problem = PadDetector::validate(d); !problem.empty())
     throw ConfigError("invalid detector parameter in " + pnh.getNamespace() + ": " + problem);
+  // Which pad to look for; the AprilTag pad's keys are read (and required) only for it.
+  const std::string detector = required<std::string>(pnh, "detector");
+  const std::optional<PadKind> kind = padKindFromString(detector);
+  if (!kind)
+    throw ConfigError("parameter '" + pnh.resolveName("detector") + "' is '" + detector +
+                      "': expected red_square or apriltag (launch/platform_detection.launch sets it from its pad argument)");
+  c.localizer.pad = *kind;
+  if (*kind == PadKind::kAprilTag) {
+    auto& a = c.localizer.apriltag;
+    for (const auto& [key, tag] : {std::pair<std::string, TagSpec*>{"apriltag/outer", &a.layout.outer},
+                                   {"apriltag/inner", &a.layout.inner}}) {
+      tag->family = required<std::string>(pnh, key + "/family");
+      tag->id = integer(key + "/id");
+      tag->size = num(key + "/size");
+    }
+    a.heading_offset = num("apriltag/heading_offset");
+    a.max_hamming = integer("apriltag/max_hamming");
+    a.min_decision_margin = num("apriltag/min_decision_margin");
+    a.shadow_lift = num("apriltag/shadow_lift");
+    a.denoise_sigma = num("apriltag/denoise_sigma");
+    a.quad_decimate = num("apriltag/quad_decimate");
+    a.close_quad_decimate = num("apriltag/close_quad_decimate");
+    a.close_height = num("apriltag/close_height");
+    a.quad_sigma = num("apriltag/quad_sigma");
+    a.min_white_black_diff = integer("apriltag/min_white_black_diff");
+    a.min_cluster_pixels = integer("apriltag/min_cluster_pixels");
+    a.decode_sharpening = num("apriltag/decode_sharpening");
+    a.size_tolerance = num("apriltag/size_tolerance");
+    a.max_layout_error_px = num("apriltag/max_layout_error_px");
+    a.min_cell_px = num("apriltag/min_cell_px");
+    if (const std::string problem = AprilTagPadDetector::validate(a); !problem.empty())
+      throw ConfigError("invalid AprilTag pad parameter in " + pnh.getNamespace() + ": " + problem +
+                        " (see config/platform_detection.yaml)");
+  }
   if (const std::string problem = PadHeightEstimator::validate(h); !problem.empty())
     throw ConfigError("invalid height parameter in " + pnh.getNamespace() + ": " + problem);
   return c;
@@ -144,8 +178,17 @@ PlatformDetectionRos::PlatformDetectionRos(ros::NodeHandle nh, ros::NodeHandle p
   image_sub_ = image_transport_.subscribe("ardrone/bottom/image_raw", 1, &PlatformDetectionRos::onImage, this,
                                           image_transport::TransportHints("raw", no_delay));
   reset_service_ = pnh_.advertiseService("reset", &PlatformDetectionRos::onReset, this);
-  ROS_INFO("platform_detection: looking for a %.2f m pad whose top is %.3f m above the ground",
-           state_.config.localizer.detector.pad.side, state_.config.localizer.height.height_landing_platform);
+  const auto& localizer = state_.config.localizer;
+  if (localizer.pad == PadKind::kAprilTag)
+    ROS_INFO("platform_detection: looking for the AprilTag pad (%s %d of %.3f m, %s %d of %.3f m at its centre) whose "
+             "top is %.3f m above the ground",
+             localizer.apriltag.layout.outer.family.c_str(), localizer.apriltag.layout.outer.id,
+             localizer.apriltag.layout.outer.size, localizer.apriltag.layout.inner.family.c_str(),
+             localizer.apriltag.layout.inner.id, localizer.apriltag.layout.inner.size,
+             localizer.height.height_landing_platform);
+  else
+    ROS_INFO("platform_detection: looking for a %.2f m red pad whose top is %.3f m above the ground",
+             localizer.detector.pad.side, localizer.height.height_landing_platform);
 }
 
 bool PlatformDetectionRos::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
@@ -393,7 +436,9 @@ void PlatformDetectionRos::publishDebugImage(const sensor_msgs::ImageConstPtr& m
     cv::drawMarker(canvas, onImage(d.centre_px), colour(255, 255, 0), cv::MARKER_CROSS, 12, 2);
     if (d.strip_found) cv::circle(canvas, onImage(d.strip_centre_px), 4, colour(0, 255, 0), 2);
     char buffer[128];
-    std::snprintf(buffer, sizeof(buffer), "%s x=%.2f y=%.2f h=%.2f q=%.2f", d.marker ? "marker" : d.partial ? "partial" : "pad",
+    const bool tags = state_.config.localizer.pad == PadKind::kAprilTag;
+    std::snprintf(buffer, sizeof(buffer), "%s x=%.2f y=%.2f h=%.2f q=%.2f",
+                  d.marker ? (tags ? "inner tag" : "marker") : d.partial ? "partial" : tags ? "tags" : "pad",
                   observation.centre_in_body.x(), observation.centre_in_body.y(), observation.height.camera_height,
                   d.quality);
     text = buffer;

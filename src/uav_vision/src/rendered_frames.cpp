@@ -88,6 +88,8 @@ std::vector<RenderedFrame> loadRenderedFrames(const std::string& dir) {
     f.exposure_gain = num("exposure_gain");
     f.sun_elevation_deg = num("sun_elevation_deg");
     f.pixel_noise_std_omitted = num("pixel_noise_std_omitted");
+    if (row.count("pad")) f.pad = text("pad");
+    if (row.count("foreign_pad_share")) f.foreign_pad_share = num("foreign_pad_share");
     frames.push_back(f);
   }
   return frames;

@@ -1,7 +1,7 @@
 """Detection benchmark on thousands of bottom-camera frames rendered on the fly (nothing is kept).
 
     rosrun landing_bench rendered_benchmark [--frames 3000] [--profiles realistic harsh] [--seed 1] [--keep DIR]
-                                            [--views approach|close]
+                                            [--views approach|close] [--pad red_square|apriltag]
 
 For each realism profile the same seeded views are rendered with mujoco_sim (landing_bench.rendered_frames)
 into a temporary directory, and ``detector_benchmark`` scores them: recall with the whole pad in view,
@@ -15,6 +15,10 @@ and turning (motion blur), the vehicle driving; in a third of the frames the dro
 the pad, in a third the red false target (fault detection_false_target) is beside the vehicle and in a
 tenth of the frames the camera looks at it. Each group of 25 frames has its own sun (the profile's
 random elevation and azimuth) and the exposure wanders from frame to frame as the profile says.
+
+``--pad apriltag`` renders the AprilTag pad (mujoco_sim.pads) instead, and detector_benchmark scores its detector: the
+camera 0.3-6 m above the pad (issue 44's range), and in a third of the frames the foreign pad (the same tag families,
+other ids) on the ground beside the vehicle, looked at in a tenth of all frames, besides the red false target.
 """
 import argparse
 import math
@@ -27,18 +31,21 @@ import time
 
 import numpy as np
 
+from mujoco_sim.pads import FOREIGN_PAD_OFFSET, PADS
+
 from .rendered_frames import FrameRenderer, View, save_png, write_truth
 
 FRAMES_PER_SUN = 25         # frames rendered with one simulator (one sun), then a new seed
 CAR_SHARE = 0.25            # of the frames over the car (pad 1.72 m high), the rest over the Summit XL
 MAX_SPEED = {"summit_xl": 3.0, "car": 15.0}  # vehicle speeds drawn up to these [m/s]
+MAX_HEIGHT = {"red_square": 5.0, "apriltag": 6.0}  # camera heights above the pad drawn up to these [m]
 FALSE_TARGET_OFFSET = 1.6   # the false target beside the vehicle, to its left (mujoco_sim simulator) [m]
 
 
 def sample_view(rng, renderer):
     """A view of a landing approach (see the module's docstring)."""
     vehicle_yaw = rng.uniform(-math.pi, math.pi)
-    height = rng.uniform(0.3, 5.0)
+    height = rng.uniform(0.3, MAX_HEIGHT[getattr(renderer, "pad", "red_square")])
     # Half of the views near the pad (mostly all of it in view), half further out (parts of it, or none).
     reach = 0.35 * height if rng.random() < 0.5 else 0.75 * height + 0.6
     radius, bearing = rng.uniform(0.0, reach), rng.uniform(-math.pi, math.pi)
@@ -55,13 +62,21 @@ def sample_view(rng, renderer):
         offset = FALSE_TARGET_OFFSET * left + rng.uniform(-0.6, 0.6, 2) * (0.5 + 0.3 * height)
     tilt, tilt_dir = math.radians(rng.uniform(0.0, 15.0)), rng.uniform(-math.pi, math.pi)
     speed, heading = rng.uniform(0.0, 1.5), rng.uniform(-math.pi, math.pi)
+    foreign_pad = False
+    if getattr(renderer, "pad", "red_square") == "apriltag":
+        # The foreign pad beside the vehicle (to its right) in a third of the frames, looked at in a tenth of all.
+        # (Drawn last: the red square's views stay the ones they were.)
+        foreign_pad = rng.random() < 1.0 / 3.0
+        if foreign_pad and rng.random() < 0.3:
+            right = np.array([math.sin(vehicle_yaw), -math.cos(vehicle_yaw)])
+            offset = FOREIGN_PAD_OFFSET * right + rng.uniform(-0.6, 0.6, 2) * (0.5 + 0.3 * height)
     return View(camera_offset=tuple(offset), camera_height=height, roll=tilt * math.cos(tilt_dir),
                 pitch=tilt * math.sin(tilt_dir), yaw=rng.uniform(-math.pi, math.pi), vehicle_yaw=vehicle_yaw,
                 vehicle_position=tuple(rng.uniform(-3.0, 3.0, 2)),
                 vehicle_speed=rng.uniform(0.0, MAX_SPEED[renderer.vehicle]),
                 relative_velocity=(speed * math.cos(heading), speed * math.sin(heading), rng.uniform(-0.5, 0.3)),
                 body_rates=tuple(np.clip(rng.normal(0.0, 0.3, 3), -1.0, 1.0)), false_target=false_target,
-                band="bench")
+                foreign_pad=foreign_pad, band="bench")
 
 
 def sample_close_view(rng, renderer):
@@ -82,10 +97,10 @@ def sample_close_view(rng, renderer):
 VIEWS = {"approach": sample_view, "close": sample_close_view}
 
 
-def render_set(profile, frames, seed, out, views="approach"):
+def render_set(profile, frames, seed, out, views="approach", pad="red_square"):
     """Renders ``frames`` views of ``profile`` into ``out`` (PNGs and truth.csv); the views depend on the seed
-    only, so every profile sees the same ones. ``views``: ``approach`` (sample_view) or ``close``
-    (sample_close_view, over the Summit XL only)."""
+    (and the pad) only, so every profile sees the same ones. ``views``: ``approach`` (sample_view) or ``close``
+    (sample_close_view, over the Summit XL only). ``pad``: the pad's face (mujoco_sim.pads.PADS)."""
     rng = np.random.default_rng(seed)
     rows = []
     renderer = None
@@ -95,7 +110,7 @@ def render_set(profile, frames, seed, out, views="approach"):
             if renderer is not None:
                 renderer.close()
             vehicle = "car" if views == "approach" and rng.random() < CAR_SHARE else "summit_xl"
-            renderer = FrameRenderer(vehicle, profile, seed=seed * 100003 + index // FRAMES_PER_SUN)
+            renderer = FrameRenderer(vehicle, profile, seed=seed * 100003 + index // FRAMES_PER_SUN, pad=pad)
         renderer.set_view(VIEWS[views](rng, renderer))
         name = "%05d_%s.png" % (index, renderer.vehicle)
         image, row = renderer.render(name)
@@ -130,6 +145,9 @@ def main(argv=None):
     parser.add_argument("--views", choices=sorted(VIEWS), default="approach",
                         help="approach: 0.3-5 m up, the pad anywhere (default); close: the last half metre, 0.3-0.7 m up "
                              "and up to 0.3 m off the centre")
+    parser.add_argument("--pad", choices=PADS, default="red_square",
+                        help="the pad rendered and scored: red_square (default) or apriltag (the AprilTag pad, 0.3-6 m up, "
+                             "with a foreign pad beside the vehicle in a third of the frames)")
     args = parser.parse_args(argv)
     if args.frames < 1:
         parser.error("--frames must be at least 1")
@@ -143,8 +161,9 @@ def main(argv=None):
         out = os.path.join(args.keep, profile) if args.keep else tempfile.mkdtemp(prefix="uav_vision_%s_" % profile)
         os.makedirs(out, exist_ok=True)
         try:
-            print("== %s: rendering %d %s views (seed %d)" % (profile, args.frames, args.views, args.seed), flush=True)
-            render_set(profile, args.frames, args.seed, out, args.views)
+            print("== %s: rendering %d %s views of the %s pad (seed %d)" % (profile, args.frames, args.views, args.pad,
+                                                                           args.seed), flush=True)
+            render_set(profile, args.frames, args.seed, out, args.views, args.pad)
             status |= subprocess.call([benchmark, "--dir", out, "--worst", str(args.worst)])
         finally:
             if not args.keep:

@@ -21,6 +21,7 @@ import numpy as np
 
 from mujoco_sim.autopilot import quat_to_matrix
 from mujoco_sim.camera_model import image_motion
+from mujoco_sim.pads import FOREIGN_PAD_BODY, FOREIGN_PAD_HALF, FOREIGN_PAD_OFFSET, check_pad
 from mujoco_sim.schema import load_sim_config
 from mujoco_sim.simulator import CAMERA_OPTICAL_IN_BODY, SONAR_FIELD_OF_VIEW_RAD, Simulator
 
@@ -30,6 +31,8 @@ PAD_HALF = 0.5               # half side of the pad [m]
 MARKER_HALF = 0.07           # half side of the white centre marker [m]
 STRIP_HALF = (0.06, 0.35)    # half extents of the green strip along the pad's forward and left axes [m]
 FALSE_TARGET_HALF = (0.5, 0.3)  # half extents of the red false target (mujoco_sim models/common.xml) [m]
+INNER_TAG_HALF = 0.1         # AprilTag pad: half the inner tag's square with its white ring (its "marker") [m]
+HEADING_OFFSET = 0.36        # AprilTag pad: its heading point (in place of the strip's centre) ahead of the centre [m]
 TIME_STEP = 5.0              # sim time between two frames of one renderer: the exposure's wander moves on [s]
 
 TRUTH_COLUMNS = [
@@ -42,7 +45,7 @@ TRUTH_COLUMNS = [
     "baro_altitude", "baro_altitude_m2", "baro_altitude_m1", "baro_altitude_p1", "baro_altitude_p2",
     "visible_pad_share", "visible_pad_corners", "strip_corners_in_view", "marker_corners_in_view",
     "pad_shadow_share", "false_target_share", "blur_px", "exposure_gain", "sun_elevation_deg",
-    "pixel_noise_std_omitted",
+    "pixel_noise_std_omitted", "pad", "foreign_pad_share",
 ]
 
 
@@ -60,6 +63,7 @@ class View:
     relative_velocity: tuple = (0.0, 0.0, 0.0)  # drone velocity - vehicle velocity, world [m/s]
     body_rates: tuple = (0.0, 0.0, 0.0)  # drone angular velocity, body frame [rad/s]
     false_target: bool = False    # the red false target beside the vehicle (fault detection_false_target)
+    foreign_pad: bool = False     # AprilTag pad: the foreign pad (other tag ids) on the ground beside the vehicle
     log_gain: float = None        # exposure: log of the brightness gain; None: the profile's wander
     band: str = ""                # label for the truth row
 
@@ -84,15 +88,19 @@ class FrameRenderer:
     ``omit_pixel_noise``: render without the profile's sensor noise (small PNGs for the repository) and
     record its std-dev in the truth for the consumer to add. ``sonar_neighbours``: draw three sonar readings
     (the frame's and one each side of it) and five barometric altitudes, else one each (as the first fixtures
-    did)."""
+    did). ``pad``: the pad's face (mujoco_sim.pads.PADS); on the AprilTag pad the truth's strip is its heading point
+    (the strip's place) and its marker the inner tag's square, and a View may put the foreign pad in view."""
 
-    def __init__(self, vehicle, profile, seed, overrides=None, omit_pixel_noise=False, sonar_neighbours=True):
+    def __init__(self, vehicle, profile, seed, overrides=None, omit_pixel_noise=False, sonar_neighbours=True,
+                 pad="red_square"):
         overrides = dict(overrides or {})
         config = sim_config(profile, overrides)
         self.noise_omitted = 0.0
         if omit_pixel_noise:
             self.noise_omitted = config["realism"]["values"]["pixel_noise_std"]
             config = sim_config(profile, dict(overrides, pixel_noise_std=0.0))
+        config["pad"] = check_pad(pad)
+        self.pad = pad
         self.profile, self.vehicle, self.sonar_neighbours = profile, vehicle, sonar_neighbours
         self.state = None
         self.sim = Simulator(config, os.path.join(SIM_PACKAGE, "models", "world_%s.xml" % vehicle), vehicle, seed=seed)
@@ -100,6 +108,7 @@ class FrameRenderer:
         self.strip_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "landing_pad_heading")
         self.marker_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "landing_pad_marker")
         self.false_target_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "false_target")
+        self.foreign_pad_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, FOREIGN_PAD_BODY)
         self.towards_sun = -np.asarray(self.sim.sun_direction, dtype=float)
         self._aim_the_sun()
         self.sun_elevation_deg = math.degrees(math.asin(max(-1.0, min(1.0, self.towards_sun[2]))))
@@ -129,6 +138,13 @@ class FrameRenderer:
         else:
             sim.false_target_until = -1.0
         sim._place_false_target(sim.time)
+        if sim.foreign_pad_mocap >= 0:
+            # The foreign pad as the view says (the fault puts it beside the vehicle with the false target).
+            x, y, yaw = d.qpos[sim.vehicle_qpos:sim.vehicle_qpos + 3]
+            d.mocap_pos[sim.foreign_pad_mocap] = ((x + FOREIGN_PAD_OFFSET * math.sin(yaw),
+                                                   y - FOREIGN_PAD_OFFSET * math.cos(yaw), 0.003)
+                                                  if view.foreign_pad else (0.0, 0.0, -50.0))
+            d.mocap_quat[sim.foreign_pad_mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
         mujoco.mj_forward(m, d)
         return sim.pad_position()
 
@@ -220,10 +236,18 @@ class FrameRenderer:
         pad_top = float(pad[2])
         pad_lift = self._pad_lift()
         pad_corners = self._corners(sim.pad_geom, PAD_HALF, PAD_HALF, pad_lift)
-        strip_corners = self._corners(self.strip_geom, STRIP_HALF[0], STRIP_HALF[1], 0.0015)
-        marker_corners = self._corners(self.marker_geom, MARKER_HALF, MARKER_HALF, 0.0015)
-        strip_top = sim.data.geom_xpos[self.strip_geom] + sim.data.geom_xmat[self.strip_geom].reshape(3, 3) @ \
-            np.array([0.0, 0.0, 0.0015])
+        if self.pad == "apriltag":
+            # The heading point where the strip's centre was, and the inner tag's square as the marker.
+            axes = sim.data.geom_xmat[sim.pad_geom].reshape(3, 3)
+            strip_top = pad + axes @ np.array([HEADING_OFFSET, 0.0, 0.0])
+            strip_corners = [strip_top + axes @ np.array([sx * STRIP_HALF[0], sy * STRIP_HALF[1], 0.0])
+                             for sx, sy in ((1, 1), (-1, 1), (-1, -1), (1, -1))]
+            marker_corners = self._corners(sim.pad_geom, INNER_TAG_HALF, INNER_TAG_HALF, pad_lift)
+        else:
+            strip_corners = self._corners(self.strip_geom, STRIP_HALF[0], STRIP_HALF[1], 0.0015)
+            marker_corners = self._corners(self.marker_geom, MARKER_HALF, MARKER_HALF, 0.0015)
+            strip_top = sim.data.geom_xpos[self.strip_geom] + sim.data.geom_xmat[self.strip_geom].reshape(3, 3) @ \
+                np.array([0.0, 0.0, 0.0015])
         pad_grid = self._pad_grid()
         pad_grid_visible = self._inside(self._project(pad_grid, camera, cam_rot_world))
         shadowed = self._shadowed(pad_grid) if sim.realism["shadows"] else np.zeros(len(pad_grid), bool)
@@ -231,6 +255,10 @@ class FrameRenderer:
         if view.false_target:
             target_grid = self._grid(self.false_target_geom, FALSE_TARGET_HALF[0], FALSE_TARGET_HALF[1], 0.003, n=11)
             false_share = float(np.mean(self._inside(self._project(target_grid, camera, cam_rot_world))))
+        foreign_share = 0.0
+        if view.foreign_pad and self.foreign_pad_geom >= 0:
+            foreign_grid = self._grid(self.foreign_pad_geom, FOREIGN_PAD_HALF, FOREIGN_PAD_HALF, 0.003, n=11)
+            foreign_share = float(np.mean(self._inside(self._project(foreign_grid, camera, cam_rot_world))))
         # The blur the simulator applied: the image motion during the exposure (mujoco_sim simulator._motion_blur).
         velocity, omega = sim.drone_velocity()
         distance = sim.sonar_distance_true(base, rot)
@@ -276,6 +304,7 @@ class FrameRenderer:
             "exposure_gain": gain,
             "sun_elevation_deg": self.sun_elevation_deg,
             "pixel_noise_std_omitted": self.noise_omitted,
+            "pad": self.pad, "foreign_pad_share": foreign_share,
         }
 
 

@@ -18,6 +18,7 @@ import time
 import yaml
 
 from . import benchmark
+from . import recorders
 from . import run_pool
 from . import runner
 from . import scenario as scenario_mod
@@ -127,7 +128,7 @@ def soak_main(argv=None):
                         help="realism profile (default: the scenario's)")
     parser.add_argument("--bag-split-s", type=float, default=None,
                         help="a new bag every this many seconds of sim time (default: %d for a run over %.0f s, "
-                             "else one bag)" % (runner.RECORDER_SPLIT_S, runner.LONG_RUN_S))
+                             "else one bag)" % (recorders.RECORDER_SPLIT_S, recorders.LONG_RUN_S))
     args = parser.parse_args(argv)
 
     def change(data):

@@ -9,6 +9,9 @@ import yaml
 
 VEHICLES = ("summit_xl", "car")
 PATHS = ("straight", "circle", "figure8", "back_and_forth", "square", "stop_and_go", "random")
+# The landing pad (SPEC section 7): the thesis' red square, or the AprilTag pad (a fiducial pad). The simulator puts it
+# on the vehicle (mujoco_sim.pads) and the detector looks for it (uav_vision's detector parameter).
+PADS = ("red_square", "apriltag")
 # The drone models the simulator flies (mujoco_sim's drone_model): ardrone2 is the AR.Drone 2.0 behind its real
 # driver's interface (ardrone_autonomy), velocity_quad the simulator's own velocity-commanded quadrotor.
 DRONE_MODELS = ("ardrone2", "velocity_quad")
@@ -60,7 +63,7 @@ def validate(data, source):
     """Validated scenario dict with every optional field filled in."""
     top = _mapping(data, source, ("name", "seed", "time_limit_s", "platform", "drone", "conditions", "sensors",
                                   "events", "expect", "description", "supervisor", "tracking", "realism", "missions",
-                                  "fuzz"))
+                                  "fuzz", "pad"))
     if "name" not in top or not isinstance(top["name"], str) or not top["name"]:
         raise ScenarioError("%s: field 'name' is required (a non-empty string)" % source)
     out = {"name": top["name"], "description": str(top.get("description", "")),
@@ -92,6 +95,7 @@ def validate(data, source):
         if out["drone"]["start"]["z"] < 0.3:
             raise ScenarioError("%s.start.z': a start away from the pad must be in the air (z >= 0.3 m)" % where)
     out["drone"]["model"] = model
+    out["pad"] = _choice(top.get("pad", "red_square"), "%s: field 'pad'" % source, PADS)
 
     where = "%s: field 'conditions" % source
     conditions = _mapping(top.get("conditions"), where + "'", ("wind_speed", "wind_direction_deg", "gust_mps",

@@ -39,13 +39,13 @@ from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
 from .scheduling import fifo_priority, stepping_priority, thread_cpu_and_wait
 from .simulator import SONAR_FIELD_OF_VIEW_RAD, Simulator
+from .vehicle_odometry import VehicleOdometry
 
 NAVDATA_STATE = {FlightMode.LANDED: Navdata.STATE_LANDED, FlightMode.TAKING_OFF: Navdata.STATE_TAKING_OFF,
                  FlightMode.FLYING: Navdata.STATE_FLYING, FlightMode.LANDING: Navdata.STATE_LANDING,
                  FlightMode.CRASHED: Navdata.STATE_CRASHED}
 _NOTHING = object()
 RESET_TIMEOUT_S = 60.0  # how long a reset_world caller waits for the loop to take it (wall) [s]
-UNKNOWN_VARIANCE = 1e6  # covariance entry of a quantity not measured (the vehicle's position in a GPS dropout)
 WHEEL_JOINTS = ["summit_xl_front_left_wheel_joint", "summit_xl_front_right_wheel_joint",
                 "summit_xl_back_left_wheel_joint", "summit_xl_back_right_wheel_joint"]
 # Global condition parameters (thesis names) that change the simulated world, with their checks.
@@ -130,6 +130,10 @@ class SimNode:
         rospy.loginfo("realism profile %s: %s", self.cfg["realism"]["profile"], json.dumps(realism))
         self.schedules["camera"] = Schedule(self.cfg["camera"]["rate_hz"])
         self.schedules["vehicle_gps"] = Schedule(self.sim.vehicle_cfg["gps_rate_hz"])
+        self.schedules["vehicle_odom"] = Schedule(self.sim.vehicle_cfg["odom_rate_hz"])
+        n = self.cfg["noise"]
+        self.vehicle_odometry = VehicleOdometry(lambda std: self.sim._noise("vehicle_odom", std), n["vehicle_speed_std"],
+                                                math.radians(n["vehicle_heading_std_deg"]), n["vehicle_yaw_rate_std"])
         self.schedules["stats"] = Schedule(0.2)
         self.next_scheduled = 0.0  # the earliest time a schedule is due [sim s]
         self.viewer_schedule = Schedule(30.0)
@@ -185,26 +189,34 @@ class SimNode:
         self.pub_clock = pub("/clock", Clock)
         self.pub_image = pub("ardrone/bottom/image_raw", Image, 2)
         self.pub_info = pub("ardrone/bottom/camera_info", CameraInfo)
-        self.pub_imu = pub("ardrone/imu", Imu)
+        # drone_model px4_quad: MAVROS's topics and services instead of ardrone/* (mavros_driver_node); its IMU is
+        # mavros/imu/data.
+        self.mavros = _emulated_mavros(self, pub) if self.sim.px4 else None
+        self.pub_imu = None if self.sim.px4 else pub("ardrone/imu", Imu)
         # The AR.Drone's driver (drone_model ardrone2) has navdata of its own: the stack's adapter makes the sonar
         # height, the altimeter and drone/navdata of it. The velocity-commanded drone speaks the stack's types.
         self.ardrone_driver = EmulatedArdroneDriver(self, pub) if self.sim.ardrone else None
-        self.pub_sonar = None if self.sim.ardrone else pub("ardrone/sonar_height", Range)
-        self.pub_altimeter = None if self.sim.ardrone else pub("ardrone/altimeter", Altimeter)
+        own = not (self.sim.ardrone or self.sim.px4)  # the velocity-commanded drone's own topics
+        self.pub_sonar = pub("ardrone/sonar_height", Range) if own else None
+        self.pub_altimeter = pub("ardrone/altimeter", Altimeter) if own else None
         self.pub_gt_altitude = pub("ardrone/groundtruth_altitude", Altimeter)
         self.pub_gt_state = pub("ardrone/ground_truth/state", Odometry)
         # The drone's GPS: the AR.Drone carries a receiver of its own (its driver publishes none), which reports as a
         # receiver's driver does (nmea_navsat_driver: NavSatFix and an ENU TwistStamped); the velocity-commanded drone
         # speaks the stack's local odometry.
         self.gps_receiver = GpsReceiver(pub, "ardrone/gps", "ardrone/base_link") if self.sim.ardrone else None
-        self.pub_gps = None if self.sim.ardrone else pub("ardrone/gps/odom", Odometry)
-        self.pub_navdata = None if self.sim.ardrone else pub("drone/navdata", Navdata)
+        self.pub_gps = pub("ardrone/gps/odom", Odometry) if own else None
+        self.pub_navdata = pub("drone/navdata", Navdata) if own else None
         self.pub_touchdown = pub("ardrone/touchdown", Touchdown, 10, latch=True)
         self.pub_gt_drone = pub("groundtruth/ardrone", PoseStamped)
         self.pub_gt_summit = pub("groundtruth/summit", PoseStamped)
         self.pub_gt_pad = pub("groundtruth/landing_pad", PoseStamped)
         self.pub_joints = pub("summit_xl/joint_states", JointState)
-        self.pub_vehicle_gps = pub("summit_xl/gps/odom", Odometry)
+        # The vehicle as its real drivers report it: a GPS receiver (NavSatFix and ENU TwistStamped, through the GPS
+        # link) and its controller's odometry (Robotnik's robotnik_base_control/odom, wired on board: no link). The
+        # stack's summit_moves/vehicle_report makes summit_xl/gps/odom of them.
+        self.vehicle_gps_receiver = GpsReceiver(pub, "summit_xl/gps", "summit_xl/base_link")
+        self.pub_vehicle_odom = pub("robotnik_base_control/odom", Odometry)
         self.pub_stats = pub("sim_stats", String, 1, latch=True)
         self.pub_tf = pub("/tf", TFMessage)  # (tf2_ros.TransformBroadcaster's publisher is a queued one)
         self.static_tf = tf2_ros.StaticTransformBroadcaster()
@@ -231,11 +243,12 @@ class SimNode:
         self.camera_info.header.frame_id = "ardrone/bottom_camera"
 
     def _init_subscribers(self):
-        if not self.sim.ardrone:  # (the AR.Drone's driver takes cmd_vel: EmulatedArdroneDriver)
+        if not (self.sim.ardrone or self.sim.px4):  # (the AR.Drone's driver takes cmd_vel: EmulatedArdroneDriver)
             rospy.Subscriber("ardrone/cmd_vel", Twist, self._on_cmd_vel, queue_size=1, tcp_nodelay=True)
         rospy.Subscriber("robotnik_base_control/cmd_vel", Twist, self._on_vehicle_cmd, queue_size=1)
-        rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
-        rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
+        if not self.sim.px4:  # (PX4 takes off and lands through MAVROS's services)
+            rospy.Subscriber("ardrone/takeoff", Empty, lambda _: self.actions.put(self.sim.takeoff), queue_size=5)
+            rospy.Subscriber("ardrone/land", Empty, lambda _: self.actions.put(self.sim.land), queue_size=5)
         rospy.Subscriber("ardrone/reset", Empty, lambda _: self.actions.put(self.sim.reset), queue_size=5)
         rospy.Subscriber("mujoco_sim/start", Empty, self._on_start, queue_size=1)
         rospy.Subscriber("mujoco_sim/hold", Empty, self._on_hold, queue_size=1)
@@ -470,6 +483,8 @@ class SimNode:
         due = self._publish_measured(t) if t + 1e-9 >= self.next_scheduled else None
         if self.ardrone_driver is not None:
             self.ardrone_driver.step(t)
+        if self.mavros is not None:
+            self.mavros.step(t)
         for link in self.links:
             if link.pending:
                 for publish in link.due(t):
@@ -503,7 +518,8 @@ class SimNode:
                 (self.pub_image.get_num_connections() or self.pub_info.get_num_connections()) and \
                 not self.sim.camera_frame_lost():
             self._capture_camera(stamp)
-        if due["imu"] and self.pub_imu.get_num_connections() and not (self.sim.ardrone and self.sim.link_lost()):
+        if due["imu"] and self.pub_imu is not None and self.pub_imu.get_num_connections() and \
+                not (self.sim.ardrone and self.sim.link_lost()):
             self._send(self.sim.navdata_link, self._imu_message(stamp), self.pub_imu)
         if due["sonar"] and self.pub_sonar is not None and self.pub_sonar.get_num_connections():
             self._send(self.sim.navdata_link, self._sonar_message(stamp), self.pub_sonar)
@@ -515,10 +531,16 @@ class SimNode:
             if not self.sim.link_lost():  # (its data rides the link)
                 for message, publisher in self.gps_receiver.messages(self.sim.gps(), stamp):
                     self._send(self.sim.gps_link, message, publisher)
-        elif due["gps"] and self.pub_gps.get_num_connections():
+        elif due["gps"] and self.pub_gps is not None and self.pub_gps.get_num_connections():
             self._send(self.sim.gps_link, self._gps_message(stamp), self.pub_gps)
-        if due["vehicle_gps"] and self.pub_vehicle_gps.get_num_connections():
-            self._send(self.sim.gps_link, self._vehicle_gps_message(stamp), self.pub_vehicle_gps)
+        if due["vehicle_gps"] and (self.vehicle_gps_receiver.pub_fix.get_num_connections() or
+                                   self.vehicle_gps_receiver.pub_vel.get_num_connections()):
+            position, _, (vx, vy), _ = self.sim.vehicle_gps()  # (None in a dropout: the receiver says NO_FIX)
+            fix = None if position is None else ((position[0], position[1], 0.0), (vx, vy, 0.0))
+            for message, publisher in self.vehicle_gps_receiver.messages(fix, stamp):
+                self._send(self.sim.gps_link, message, publisher)
+        if due["vehicle_odom"]:  # (every tick, subscribed or not: the odometry dead-reckons its pose)
+            self.pub_vehicle_odom.publish(self._vehicle_odom_message(stamp))
         if due["navdata"] and self.pub_navdata is not None:
             self._send(self.sim.navdata_link, self._navdata_message(stamp), self.pub_navdata)
         return due, stamp
@@ -690,18 +712,18 @@ class SimNode:
         odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, 1e6)
         return odom
 
-    def _vehicle_gps_message(self, stamp):
-        position, yaw, (vx, vy), yaw_rate = self.sim.vehicle_gps()
-        x, y = position if position is not None else (0.0, 0.0)
-        odom = Odometry(header=self._header(stamp, "world"), child_frame_id="summit_xl/base_link")
-        _fill_pose(odom.pose.pose, (x, y, 0.0), _yaw_quaternion(yaw))
-        _fill_vector(odom.twist.twist.linear, (vx, vy, 0.0))
-        odom.twist.twist.angular.z = yaw_rate
-        n = self.cfg["noise"]
-        # During a GPS dropout the vehicle's odometry goes on; its position is unknown (REP 105 style: a huge variance).
-        position_variance = n["gps_position_std"] ** 2 if position is not None else UNKNOWN_VARIANCE
-        odom.pose.covariance = _diag6(position_variance, math.radians(n["vehicle_heading_std_deg"]) ** 2)
-        odom.twist.covariance = _diag6(n["gps_velocity_std"] ** 2, n["vehicle_yaw_rate_std"] ** 2)
+    def _vehicle_odom_message(self, stamp):
+        """robotnik_base_control/odom: the pose in summit_xl/odom (yaw aligned with ENU), the twist in the base frame
+        (vehicle_odometry.py)."""
+        _, _, yaw = self.sim.vehicle_pose()
+        vx, vy, yaw_rate = self.sim.vehicle_velocity()
+        reading = self.vehicle_odometry.measure(self.sim.time, yaw, (vx, vy), yaw_rate)
+        odom = Odometry(header=self._header(stamp, "summit_xl/odom"), child_frame_id="summit_xl/base_link")
+        _fill_pose(odom.pose.pose, (reading.position[0], reading.position[1], 0.0), _yaw_quaternion(reading.yaw))
+        odom.twist.twist.linear.x = reading.forward_speed
+        odom.twist.twist.angular.z = reading.yaw_rate
+        odom.pose.covariance = reading.pose_covariance
+        odom.twist.covariance = reading.twist_covariance
         return odom
 
     def _navdata_message(self, stamp):
@@ -767,6 +789,11 @@ class SimNode:
         _fill_vector(msg.transform.translation, position)
         _quaternion_msg(msg.transform.rotation, quat_wxyz)
         return msg
+
+
+def _emulated_mavros(node, make_publisher):
+    from .mavros_driver_node import EmulatedMavros  # (mavros_msgs is needed only where px4_quad flies)
+    return EmulatedMavros(node, make_publisher)
 
 
 def _condition_anew(name):

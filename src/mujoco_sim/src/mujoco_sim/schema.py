@@ -1,6 +1,7 @@
 """The simulator's parameters: names, types, ranges and units (documented in config/sim.yaml)."""
 from . import realism
 from .config import ConfigError, Param, load_yaml, validate
+from .pads import PADS
 
 F, I, B, S = float, int, bool, str
 
@@ -13,13 +14,15 @@ _VEHICLE = {
     "wheel_radius": Param(F, 0.01, 1.0, "m"),
     "track_width": Param(F, 0.1, 3.0, "m"),
     "gps_rate_hz": Param(F, 0.1, 100.0, "Hz"),
+    "odom_rate_hz": Param(F, 1.0, 500.0, "Hz"),
 }
 
-DRONE_MODELS = ("velocity_quad", "ardrone2")
+DRONE_MODELS = ("velocity_quad", "ardrone2", "px4_quad")
 
 SIM_SCHEMA = {
     "seed": Param(I, 0),
     "vehicle": Param(S, choices=("summit_xl", "car")),
+    "pad": Param(S, choices=PADS),
     "drone_model": Param(S, choices=DRONE_MODELS),
     "real_time_factor": Param(F, 0.0, 1000.0),
     "lockstep": {
@@ -70,6 +73,7 @@ SIM_SCHEMA = {
         "gps_velocity_std": Param(F, 0.0, 5.0, "m/s"),
         "vehicle_heading_std_deg": Param(F, 0.0, 30.0, "deg"),
         "vehicle_yaw_rate_std": Param(F, 0.001, 5.0, "rad/s"),
+        "vehicle_speed_std": Param(F, 0.0, 5.0, "m/s"),
         "flow_velocity_std": Param(F, 0.0, 5.0, "m/s"),
     },
     "sensors": {
@@ -120,6 +124,62 @@ SIM_SCHEMA = {
         "video_channel": Param(I, 0, 1),
         "camera_switch_delay_s": Param(F, 0.0, 5.0, "s"),
     },
+    # PX4 behind MAVROS: the airframe, PX4's parameters (their PX4 names in config/sim.yaml), the emulated MAVROS.
+    "px4_quad": {
+        "mass": Param(F, 0.5, 10.0, "kg"),
+        "inertia": Param(list),
+        "arm_length": Param(F, 0.05, 1.0, "m"),
+        "max_rotor_thrust": Param(F, 1.0, 100.0, "N"),
+        "drag_area_horizontal": Param(F, 0.0, 1.0, "m^2"),
+        "drag_area_vertical": Param(F, 0.0, 1.0, "m^2"),
+        "rotor_drag": Param(F, 0.0, 5.0, "N/(m/s)"),
+        "max_horizontal_speed": Param(F, 0.5, 40.0, "m/s"),
+        "max_climb_speed": Param(F, 0.5, 10.0, "m/s"),
+        "max_descent_speed": Param(F, 0.3, 10.0, "m/s"),
+        "max_tilt_deg": Param(F, 10.0, 80.0, "deg"),
+        "max_yaw_rate": Param(F, 0.1, 10.0, "rad/s"),
+        "velocity_p_gain_xy": Param(F, 0.0, 20.0, "1/s"),
+        "velocity_i_gain_xy": Param(F, 0.0, 20.0, "1/s^2"),
+        "velocity_d_gain_xy": Param(F, 0.0, 5.0),
+        "velocity_p_gain_z": Param(F, 0.0, 20.0, "1/s"),
+        "velocity_i_gain_z": Param(F, 0.0, 20.0, "1/s^2"),
+        "velocity_d_gain_z": Param(F, 0.0, 5.0),
+        "velocity_integral_limit": Param(F, 0.0, 20.0, "m/s^2"),
+        "velocity_derivative_time_constant": Param(F, 0.001, 1.0, "s"),
+        "position_gain_xy": Param(F, 0.0, 10.0, "1/s"),
+        "position_gain_z": Param(F, 0.0, 10.0, "1/s"),
+        "yaw_gain": Param(F, 0.0, 20.0, "1/s"),
+        "takeoff_altitude": Param(F, 0.5, 50.0, "m"),
+        "takeoff_speed": Param(F, 0.2, 5.0, "m/s"),
+        "takeoff_trigger_speed": Param(F, 0.05, 3.0, "m/s"),
+        "takeoff_clear_height": Param(F, 0.1, 5.0, "m"),
+        "land_speed": Param(F, 0.1, 3.0, "m/s"),
+        "initial_mode": Param(S, choices=("MANUAL", "STABILIZED", "ALTCTL", "POSCTL", "AUTO.LOITER")),
+        "pilot_takeover_mode": Param(S, choices=("MANUAL", "STABILIZED", "ALTCTL", "POSCTL")),
+        "offboard_stream_period_s": Param(F, 0.01, 5.0, "s"),
+        "offboard_loss_timeout_s": Param(F, 0.05, 60.0, "s"),
+        "offboard_loss_hold_s": Param(F, 0.0, 600.0, "s"),
+        "position_loss_timeout_s": Param(F, 0.1, 600.0, "s"),
+        "land_detector_s": Param(F, 0.0, 10.0, "s"),
+        "disarm_after_land_s": Param(F, 0.0, 600.0, "s"),
+        "disarm_preflight_s": Param(F, 0.0, 600.0, "s"),
+        "arm_min_battery": Param(F, 0.0, 100.0, "%"),
+        "battery_land_percent": Param(F, 0.0, 100.0, "%"),
+        "gps_rate_hz": Param(F, 0.5, 50.0, "Hz"),
+        "ekf_gps_position_gain": Param(F, 0.0, 50.0, "1/s"),
+        "ekf_gps_velocity_gain": Param(F, 0.0, 50.0, "1/s"),
+        "ekf_accel_bias_gain": Param(F, 0.0, 50.0, "1/s^2"),
+        "ekf_baro_gain": Param(F, 0.0, 50.0, "1/s"),
+        "ekf_baro_climb_gain": Param(F, 0.0, 50.0, "1/s^2"),
+        "heartbeat_hz": Param(F, 0.1, 50.0, "Hz"),
+        "extended_state_hz": Param(F, 0.1, 100.0, "Hz"),
+        "local_position_hz": Param(F, 0.5, 250.0, "Hz"),
+        "global_position_hz": Param(F, 0.1, 100.0, "Hz"),
+        "imu_hz": Param(F, 0.5, 250.0, "Hz"),
+        "battery_hz": Param(F, 0.1, 50.0, "Hz"),
+        "connection_timeout_s": Param(F, 0.1, 120.0, "s"),
+        "command_timeout_s": Param(F, 0.1, 120.0, "s"),
+    },
     "vehicle_start": {
         "x": Param(F, -1e4, 1e4, "m"),
         "y": Param(F, -1e4, 1e4, "m"),
@@ -163,6 +223,15 @@ def validate_sim_config(tree, source):
     if ardrone["altitude_min"] >= ardrone["altitude_max"]:
         raise ConfigError("%s: parameter 'ardrone2/altitude_min' (%d mm) must be below 'ardrone2/altitude_max' (%d mm)"
                           % (source, ardrone["altitude_min"], ardrone["altitude_max"]))
+    px4 = config["px4_quad"]
+    inertia = px4["inertia"]
+    if len(inertia) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in inertia):
+        raise ConfigError("%s: parameter 'px4_quad/inertia': got %r, expected [Ixx, Iyy, Izz] > 0 in kg m^2" % (
+            source, inertia))
+    px4["inertia"] = [float(v) for v in inertia]
+    if 4 * px4["max_rotor_thrust"] <= 1.2 * px4["mass"] * 9.81:
+        raise ConfigError("%s: parameter 'px4_quad/max_rotor_thrust' (%g N) cannot lift 'px4_quad/mass' (%g kg) with "
+                          "a margin: four rotors need more than 1.2 m g" % (source, px4["max_rotor_thrust"], px4["mass"]))
     start = config["drone"]["start_position"]
     if len(start) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in start):
         raise ConfigError("%s: parameter 'drone/start_position': got %r, expected [x, y, z] in m" % (source, start))

@@ -22,6 +22,9 @@ from .config import ConfigError
 from .environment import Battery, Wind, aerodynamic_force
 from .firmware import FirmwareEstimator
 from .frame_renderer import FRAME_TIMEOUT_S, FrameRenderer
+from .pads import FOREIGN_PAD_BODY, FOREIGN_PAD_OFFSET, check_pad, compile_world
+from .px4_firmware import Px4Firmware
+from .px4_world import Px4World, configure_airframe
 from .realism import DelayLine, Dropouts, GaussMarkov, RandomWalk
 
 LOG = logging.getLogger("mujoco_sim.simulator")
@@ -38,7 +41,7 @@ DRONE_GEOM_GROUP = 3    # the drone's own geoms, hidden from its bottom camera (
 # Random processes, each with its own generator derived from the seed (the first eight are the original ones).
 RNG_STREAMS = ("imu", "sonar", "altimeter", "gps", "camera", "wind", "vehicle_gps", "flow",
                "imu_bias", "gps_error", "vehicle_gps_error", "gps_dropouts", "sonar_outlier", "command_link",
-               "light", "exposure", "flow_scale", "camera_link", "navdata_link", "gps_link")
+               "light", "exposure", "flow_scale", "camera_link", "navdata_link", "gps_link", "vehicle_odom")
 
 
 def classify_touchdown(surface, impact_speed, tilt_deg, crash_speed, crash_tilt_deg):
@@ -60,13 +63,15 @@ class Touchdown:
             self.impact_speed, self.tilt_deg, self.pad_error)
 
 
-def load_model(model_file):
-    """Load an MJCF file; a missing or malformed file raises ConfigError naming it."""
+def load_model(model_file, pad="red_square"):
+    """Load an MJCF file with the landing pad's face ``pad`` (pads.PADS: red_square as in the file, or apriltag);
+    a missing or malformed file, or an unknown pad, raises ConfigError naming it."""
     import mujoco
     if not os.path.isfile(model_file):
         raise ConfigError("%s: model file not found" % model_file)
+    check_pad(pad, "%s: pad" % model_file)
     try:
-        model = mujoco.MjModel.from_xml_path(model_file)
+        model = compile_world(model_file, pad)
     except ValueError as err:
         raise ConfigError("%s: cannot load the MuJoCo model: %s" % (model_file, err)) from err
     required = {"body": ["ardrone", "vehicle"], "geom": ["landing_pad", "ground"],
@@ -87,7 +92,8 @@ class Simulator:
         import mujoco
         self._mj = mujoco
         self.cfg = config
-        self.model = load_model(model_file)
+        self.pad = config.get("pad", "red_square")  # the pad's face (pads.PADS)
+        self.model = load_model(model_file, self.pad)
         self.data = mujoco.MjData(self.model)
         self.vehicle_cfg = config["vehicles"][vehicle]
         m = self.model
@@ -113,6 +119,9 @@ class Simulator:
         false_target = name2id(obj.mjOBJ_BODY, "false_target")
         self.false_target_mocap = int(m.body_mocapid[false_target]) if false_target >= 0 else -1
         self.false_target_until = -1.0
+        # The AprilTag pad's world also has a foreign pad (other tag ids), beside the vehicle with the false target.
+        foreign_pad = name2id(obj.mjOBJ_BODY, FOREIGN_PAD_BODY)
+        self.foreign_pad_mocap = int(m.body_mocapid[foreign_pad]) if foreign_pad >= 0 else -1
         self.camera_blackout_until = -1.0
 
         # One generator per process, so that a new effect never shifts the draws of an older one.
@@ -123,6 +132,8 @@ class Simulator:
         self.realism = config["realism"]["values"]
 
         drone = config["drone"]
+        if config["drone_model"] == "px4_quad":  # a 1.5-2 kg airframe: mass, inertia, arms and rotors from px4_quad:
+            configure_airframe(mujoco, m, self.data, self.drone_body, self.rotor_actuators, config["px4_quad"])
         rotors = []
         for act in self.rotor_actuators:
             site = m.actuator_trnid[act][0]
@@ -134,6 +145,8 @@ class Simulator:
         # auto-hover, watchdog, navdata and camera channel as the real one has them).
         self.drone_model = config["drone_model"]
         self.ardrone = self.drone_model == "ardrone2"
+        self.px4 = self.drone_model == "px4_quad"  # PX4 behind MAVROS (px4_firmware, px4_world)
+        self.px4_world = None
         self.ardrone_driver = self.camera_channel = self.navdata_schedule = None
         if self.ardrone:
             a = config["ardrone2"]
@@ -147,6 +160,10 @@ class Simulator:
             self.next_at_command = 0.0   # when the driver's SDK sends the stored command again [s]
             self.surface_z = 0.0         # height of the surface below (ideal firmware's altitude) [m]
             self.surface_due = 0.0
+        elif self.px4:
+            self.autopilot = Px4Firmware(drone, config["px4_quad"], mass, m.body_inertia[self.drone_body].copy(),
+                                         rotors, max_rotor_thrust)
+            self.rotor_drag = config["px4_quad"]["rotor_drag"]
         else:
             self.autopilot = Autopilot(drone, mass, m.body_inertia[self.drone_body].copy(), rotors, max_rotor_thrust)
         self.link_lost_until = -1.0
@@ -159,6 +176,9 @@ class Simulator:
                                bat["cold_reference_temp"], bat["cold_factor_per_deg"])
         self.temperature = config["conditions"]["temp"]
         self.drag_area = np.array([drone["drag_area_horizontal"]] * 2 + [drone["drag_area_vertical"]])
+        if self.px4:
+            px4 = config["px4_quad"]
+            self.drag_area = np.array([px4["drag_area_horizontal"]] * 2 + [px4["drag_area_vertical"]])
 
         self.vehicle_target = (0.0, 0.0)      # commanded (v, omega)
         self.vehicle_command = [0.0, 0.0]     # after acceleration limits
@@ -172,6 +192,8 @@ class Simulator:
         self.camera_fovy = float(m.cam_fovy[self.camera])  # of the published image; the render may be wider
         self.vehicle_rectangle = _textured_top_rectangle(m, self.pad_geom)
         self._init_realism()
+        if self.px4:
+            self.px4_world = Px4World(self, config["px4_quad"])
         self._place_at_start()
 
     def _init_realism(self):
@@ -196,7 +218,8 @@ class Simulator:
                                       r["navdata_drop_rate"])
         self.gps_link = DelayLine(rng["gps_link"], r["gps_latency_s"])
         self.flow_scale = 1.0 + r["flow_scale_error_std"] * rng["flow_scale"].standard_normal()
-        self.firmware = FirmwareEstimator(self.cfg["firmware"]) if r["firmware_on_estimate"] else None
+        # (px4_quad flies on its own estimator: px4_world)
+        self.firmware = FirmwareEstimator(self.cfg["firmware"]) if r["firmware_on_estimate"] and not self.px4 else None
         self.firmware_schedule = {"flow": 0.0, "sonar": 0.0}
         self.surface_weight = 0.0  # how much the optical flow follows the vehicle (flow_surface_coupling)
         # The sun: direction from its elevation and azimuth, each drawn within its spread from the seed.
@@ -264,9 +287,9 @@ class Simulator:
     def set_velocity_command(self, vx, vy, vz, yaw_rate):
         """Returns None when accepted, else why the command was ignored (the drone then holds). An accepted
         command reaches the drone after the command link's latency, or is lost (realism)."""
-        if self.ardrone:
-            raise RuntimeError("set_velocity_command needs drone_model velocity_quad (this world flies ardrone2: "
-                               "use set_ardrone_command)")
+        if self.ardrone or self.px4:
+            raise RuntimeError("set_velocity_command needs drone_model velocity_quad (this world flies %s: use %s)" % (
+                self.drone_model, "set_ardrone_command" if self.ardrone else "px4_world's set-points and commands"))
         problem = VelocityCommand.problem((vx, vy, vz, yaw_rate))
         if problem:
             self._send(self._hold)
@@ -329,6 +352,9 @@ class Simulator:
         return self._send(self._takeoff)
 
     def _takeoff(self):
+        if self.px4:
+            LOG.warning("ardrone/takeoff ignored: drone_model px4_quad takes off through MAVROS (px4_world)")
+            return False
         if self.battery.empty:
             LOG.warning("take-off refused: the battery is empty")
             return False
@@ -347,6 +373,9 @@ class Simulator:
         return self._send(self._land)
 
     def _land(self):
+        if self.px4:
+            LOG.warning("ardrone/land ignored: drone_model px4_quad lands through MAVROS (px4_world)")
+            return False
         if self.ardrone:
             self.autopilot.heard(self.time)
         return self.autopilot.land()
@@ -357,6 +386,8 @@ class Simulator:
 
     def _reset(self):
         self.autopilot.reset()
+        if self.px4:
+            self.px4_world.reset()
         self.touchdown = None
         if self.cfg["drone"]["start_on_pad"]:
             self._put_drone_on_pad()
@@ -400,14 +431,17 @@ class Simulator:
         if airborne or position[2] > 0.3:
             wind = self.wind.velocity()
             force = aerodynamic_force(wind, velocity, self.drag_area)
-            if self.ardrone and airborne:
+            if (self.ardrone or self.px4) and airborne:
                 # Rotor drag, proportional to the air speed, while the rotors turn (horizontal, in the world frame: at
                 # the firmware's tilts the rotor plane is within 30 deg of level).
                 force[:2] -= self.rotor_drag * (velocity[:2] - wind[:2])
             d.xfrc_applied[self.drone_body, :3] = force
         else:
             d.xfrc_applied[self.drone_body, :3] = 0.0
-        if self.firmware is not None:
+        if self.px4:
+            mode_before = self.autopilot.mode
+            flown_position, flown_velocity = self.px4_world.step(now, dt, quat)
+        elif self.firmware is not None:
             flown_position, flown_velocity = self._firmware_step(now, dt, quat)
         else:
             flown_position, flown_velocity = position, velocity
@@ -419,6 +453,9 @@ class Simulator:
             thrusts = self.autopilot.update(dt, flown_position, flown_velocity, quat, omega, self.command,
                                             power_available=not self.battery.empty)
         d.ctrl[self.rotor_ctrl] = thrusts
+        if self.px4 and self.autopilot.mode == FlightMode.TAKING_OFF and mode_before != FlightMode.TAKING_OFF:
+            self._takeoff_z = float(position[2])  # (a take-off of PX4's own: the contact check's reference)
+            self.touchdown = None
         self._drive_vehicle(dt, now)
         if self.false_target_mocap >= 0:
             self._place_false_target(now)
@@ -589,6 +626,9 @@ class Simulator:
         if self.ardrone:
             if not crashed and mode != FlightMode.LANDING:
                 return  # the AR.Drone touches down only after the land command: else it flies on (altitude_min)
+        elif self.px4:
+            if not crashed and mode != FlightMode.LANDING and self.autopilot.climbing:
+                return  # a graze while climbing is not a landing (PX4's land detector needs a descent or a hover)
         elif not crashed and mode != FlightMode.LANDING and self.command.vz > 0:
             return  # a graze while climbing is not a landing
         pad = d.site_xpos[self.pad_site]
@@ -600,7 +640,7 @@ class Simulator:
         LOG.info(self.touchdown.describe())
 
     # ----- faults (robustness scenarios) --------------------------------------------------------
-    FAULTS = ("camera_blackout", "detection_false_target", "link_loss")
+    FAULTS = ("camera_blackout", "detection_false_target", "link_loss", "pilot_takeover")
 
     def inject_fault(self, fault, duration_s):
         """Start a fault for ``duration_s`` sim seconds; returns False for an unknown fault."""
@@ -614,6 +654,10 @@ class Simulator:
             # velocity_quad: the velocity commands are lost). The node may drop what the drone sends meanwhile
             # too (link_lost).
             self.link_lost_until = until
+        elif fault == "pilot_takeover" and self.px4:
+            # drone_model px4_quad: the pilot flips the RC mode switch to px4_quad/pilot_takeover_mode and keeps the
+            # drone (duration_s does not matter: the pilot hands back by a mode request, e.g. OFFBOARD).
+            self.px4_world.pilot_mode(self.cfg["px4_quad"]["pilot_takeover_mode"])
         else:
             return False
         LOG.info("fault %s for %.1f s", fault, duration_s)
@@ -626,13 +670,20 @@ class Simulator:
         return self.time < self.camera_blackout_until
 
     def _place_false_target(self, now):
-        """Beside the vehicle (1.6 m to its left, on the ground) while the fault lasts."""
+        """Beside the vehicle (1.6 m to its left, on the ground) while the fault lasts; the AprilTag pad's world
+        also puts its foreign pad FOREIGN_PAD_OFFSET to the vehicle's right."""
         if now < self.false_target_until:
             x, y, yaw = self.data.qpos[self.vehicle_qpos:self.vehicle_qpos + 3]
             self.data.mocap_pos[self.false_target_mocap] = (x - 1.6 * math.sin(yaw), y + 1.6 * math.cos(yaw), 0.003)
             self.data.mocap_quat[self.false_target_mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+            if self.foreign_pad_mocap >= 0:
+                self.data.mocap_pos[self.foreign_pad_mocap] = (x + FOREIGN_PAD_OFFSET * math.sin(yaw),
+                                                               y - FOREIGN_PAD_OFFSET * math.cos(yaw), 0.003)
+                self.data.mocap_quat[self.foreign_pad_mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
         elif self.data.mocap_pos[self.false_target_mocap][2] > -1.0:
             self.data.mocap_pos[self.false_target_mocap] = (0.0, 0.0, -50.0)
+            if self.foreign_pad_mocap >= 0:
+                self.data.mocap_pos[self.foreign_pad_mocap] = (0.0, 0.0, -50.0)
 
     # ----- ground truth (scoring and tf only) ----------------------------------------------------
     def drone_pose(self):

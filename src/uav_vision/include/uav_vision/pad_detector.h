@@ -85,6 +85,10 @@ struct Detection {
   double quality = 0.0;             // 0..1: shape, size and fit agreement
   double optical_axis_margin_px = 0.0;  // signed distance of the principal point to the pad outline (+ inside)
   std::vector<cv::Point> outline;   // pad outline in the image (image pixels, not undistorted)
+  // AprilTag pad (AprilTagPadDetector) only: the pad's pose from the tags' known sizes and K, no height needed.
+  bool pose_found = false;
+  cv::Vec3d pad_in_camera;          // pad centre in the camera's optical frame (x right, y down, z out) [m]
+  cv::Matx33d pad_axes_in_camera;   // columns: the pad's forward, left and up axes in the optical frame
 };
 
 // Not thread-safe: keeps its work images between calls (one detector per thread).

@@ -33,6 +33,11 @@ struct RenderedFrame {
   double false_target_share = 0;       // of the red false target's area in the image [0..1]
   double blur_px = 0, exposure_gain = 1, sun_elevation_deg = 90;
   double pixel_noise_std_omitted = 0;  // sensor noise left out of the PNG: add it (addSensorNoise) [fraction of 255]
+  // Optional columns (older sets have neither): the pad's face, and the share of the foreign pad (AprilTag pad's
+  // world: other tag ids) in the image [0..1]. On the AprilTag pad, strip_in_body is its heading point and the
+  // "marker" is the inner tag's square with its white ring.
+  std::string pad = "red_square";
+  double foreign_pad_share = 0;
 
   bool wholePadInView() const { return visible_pad_corners == 4; }
   bool padInView() const { return visible_pad_share > 0.0; }
