@@ -81,34 +81,24 @@ def render(figures):
 
 
 def table(all_figures):
-    """A markdown table of several flights' budgets, a column per flight: CPU per stack node, the whole stack, the
-    simulator for scale, the latency's p50/p99 and the real-time factor kept."""
+    """A markdown table of several flights' budgets, a column per flight (the README's: the stack in all, its largest
+    node, the simulator for scale, the whole chain's latency; per node and per step: compute_budget.json)."""
     heads = ["%s (%s)" % (f["scenario"], f["drone_model"]) for f in all_figures]
-    nodes = []
-    for f in all_figures:
-        nodes += [n for n in f["cpu_per_flight_s"] if n not in nodes]
 
-    def cell(value, fmt):
-        return "-" if value is None else fmt % value
-    rows = [["CPU `%s` [s/s]" % n] + [cell(f["cpu_per_flight_s"].get(n), "%.3f") for f in all_figures] for n in nodes]
-    rows.append(["**CPU, the stack in all** [s/s]"] + ["**%.3f**" % f["cpu_stack_total"] for f in all_figures])
-    rows.append(["CPU, the simulator (not the stack) [s/s]"] +
-                [cell(f["cpu_not_the_stack"].get("mujoco_sim"), "%.3f") for f in all_figures])
-    for stage, label in (("total", "**frame -> drone command** p50 / p99 [ms]"),
-                         ("detection", "frame -> detection p50 / p99 [ms]"),
-                         ("estimate", "detection -> pad estimate p50 / p99 [ms]"),
-                         ("stack_command", "pad estimate -> tracker command p50 / p99 [ms]"),
-                         ("drone_command", "tracker command -> drone command p50 / p99 [ms]")):
-        row = [label]
-        for f in all_figures:
-            latency = (f["latency"] or {}).get(stage) or {}
-            row.append("-" if latency.get("p50_ms") is None else "%.1f / %.1f" % (latency["p50_ms"], latency["p99_ms"]))
-        rows.append(row)
-    rows.append(["frames with the pad / chains measured"] +
-                ["%s / %s" % ((f["latency"] or {}).get("detected", "-"), (f["latency"] or {}).get("chains", "-"))
-                 for f in all_figures])
-    rows.append(["real-time factor kept, outcome"] + ["%s, %s" % (f["real_time_factor"], f["outcome"])
-                                                      for f in all_figures])
+    def largest(f):
+        name, value = max(f["cpu_per_flight_s"].items(), key=lambda kv: kv[1], default=("-", None))
+        return "-" if value is None else "%.3f (`%s`)" % (value, name)
+
+    def latency(f, stage):
+        figures = ((f["latency"] or {}).get(stage) or {})
+        return "-" if figures.get("p50_ms") is None else "%.0f / %.0f" % (figures["p50_ms"], figures["p99_ms"])
+    rows = [["CPU per flight second, the stack [s/s]"] + ["**%.3f**" % f["cpu_stack_total"] for f in all_figures],
+            ["... its largest node"] + [largest(f) for f in all_figures],
+            ["... the simulator, for scale"] + ["%.3f" % f["cpu_not_the_stack"].get("mujoco_sim", float("nan"))
+                                               for f in all_figures],
+            ["frame -> drone command, p50 / p99 [ms]"] + ["**%s**" % latency(f, "total") for f in all_figures],
+            ["real-time factor kept, outcome"] + ["%s, %s" % (f["real_time_factor"], f["outcome"])
+                                                  for f in all_figures]]
     lines = ["| | " + " | ".join(heads) + " |", "|---" * (len(heads) + 1) + "|"]
     return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
 
