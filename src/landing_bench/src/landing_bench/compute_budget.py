@@ -18,6 +18,7 @@ Compare figures only within one machine and its load.
 import argparse
 import json
 import os
+import subprocess
 import sys
 
 from landing_eval import runner
@@ -139,12 +140,30 @@ def main(argv=None):
     all_figures = []
     for path in args.scenarios:
         name = os.path.splitext(os.path.basename(path))[0]
-        model_dir = os.path.basename(os.path.dirname(os.path.abspath(path)))
-        try:
-            figures = fly(path, os.path.join(args.out, "%s_%s" % (model_dir, name)))
-        except RuntimeError as err:
-            print("compute_budget: %s" % err, file=sys.stderr)
-            return 3
+        out_dir = os.path.join(args.out, "%s_%s" % (os.path.basename(os.path.dirname(os.path.abspath(path))), name))
+        if len(args.scenarios) == 1:
+            try:
+                figures = fly(path, out_dir)
+            except RuntimeError as err:
+                print("compute_budget: %s" % err, file=sys.stderr)
+                return 3
+        else:  # a process each: rospy joins one master per process, and every flight has a master of its own
+            try:  # (bounded: the run's own wall limits, and a minute more)
+                bound = runner.wall_limits(scenario_mod.load(path)["time_limit_s"])["total"] + 60.0
+                status = subprocess.call([sys.executable, "-m", "landing_bench.compute_budget", path, "--out", args.out],
+                                         stdout=subprocess.DEVNULL, timeout=bound)
+            except scenario_mod.ScenarioError as err:
+                print("compute_budget: %s" % err, file=sys.stderr)
+                return 2
+            except subprocess.TimeoutExpired:
+                status = "killed after %.0f s" % bound
+            try:
+                with open(os.path.join(out_dir, "compute_budget.json")) as stream:
+                    figures = json.load(stream)
+            except (OSError, ValueError):
+                print("compute_budget: %s left no figures (exit %s); see %s" % (path, status, out_dir),
+                      file=sys.stderr)
+                return 3
         print(render(figures) + "\n")
         all_figures.append(figures)
     if args.readme:
@@ -152,8 +171,12 @@ def main(argv=None):
         import datetime
         import platform
         commit, command = provenance("rosrun landing_bench compute_budget")
-        heading = "%s at commit `%s` (%s, %d cores, other work on the machine): `%s`" % (
+        heading = "%s at commit `%s` (%s, %d cores): `%s`" % (
             datetime.date.today().isoformat(), commit, platform.machine(), os.cpu_count(), command)
         update_readme(args.readme, heading, table(all_figures), markers=README_MARKERS)
         print("compute_budget: the table is in %s" % args.readme)
     return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
