@@ -171,13 +171,14 @@ REALISTIC = [
 ]
 
 
-def render_realistic(out):
-    """The realistic set: each frame of REALISTIC, the profile's sensor noise left to the test."""
+def render_set(frames, out, pad="red_square"):
+    """Each frame of ``frames`` ((label, renderer key, view arguments)) as a PNG in ``out``, the profile's sensor noise
+    left to the test; the rows of their truth."""
     renderers, rows = {}, []
-    for index, (label, key, arguments) in enumerate(REALISTIC):
+    for index, (label, key, arguments) in enumerate(frames):
         vehicle, profile, seed, overrides = key
         if seed not in renderers:
-            renderers[seed] = FrameRenderer(vehicle, profile, seed, overrides, omit_pixel_noise=True)
+            renderers[seed] = FrameRenderer(vehicle, profile, seed, overrides, omit_pixel_noise=True, pad=pad)
         renderer = renderers[seed]
         if "jitter" in arguments:
             arguments = shadow_view(renderer, arguments)
@@ -191,6 +192,11 @@ def render_realistic(out):
     for renderer in renderers.values():
         renderer.close()
     return rows
+
+
+def render_realistic(out):
+    """The realistic set: each frame of REALISTIC."""
+    return render_set(REALISTIC, out)
 
 
 # The AprilTag pad's set: (label, renderer key, view arguments), renderer keys as REALISTIC's. Labels: whole (the pad
@@ -231,24 +237,8 @@ APRILTAG = [
 
 
 def render_apriltag(out):
-    """The AprilTag pad's set: each frame of APRILTAG, the profile's sensor noise left to the test."""
-    renderers, rows = {}, []
-    for index, (label, key, arguments) in enumerate(APRILTAG):
-        vehicle, profile, seed, overrides = key
-        if seed not in renderers:
-            renderers[seed] = FrameRenderer(vehicle, profile, seed, overrides, omit_pixel_noise=True, pad="apriltag")
-        renderer = renderers[seed]
-        if "jitter" in arguments:
-            arguments = shadow_view(renderer, arguments)
-        view = View(band=label, vehicle_position=(0.5, -0.5), **arguments)
-        renderer.set_view(view)
-        name = "%02d_%s_%s_h%03d.png" % (index, label, key[0], int(round(view.camera_height * 100)))
-        image, row = renderer.render(name)
-        save_png(os.path.join(out, name), image)
-        rows.append(row)
-    for renderer in renderers.values():
-        renderer.close()
-    return rows
+    """The AprilTag pad's set: each frame of APRILTAG."""
+    return render_set(APRILTAG, out, pad="apriltag")
 
 
 def main():

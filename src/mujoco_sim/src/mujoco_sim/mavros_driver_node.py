@@ -27,23 +27,13 @@ from std_msgs.msg import Header, String
 
 from .config import ConfigError
 from .px4_firmware import KNOWN_MODES, PILOT_MODES, Setpoint
+from .schedule import Schedule
 
 DATUM_PARAM = "/navsat_datum"
 LOCAL_FRAME, BODY_FRAME = "map", "base_link"  # MAVROS's default frame ids
 VTOL_STATE_MC = 3
 CELLS, CELL_FULL_V, CELL_EMPTY_V = 4, 4.2, 3.5  # a 4S LiPo: what the voltage says of the charge
 EPH_M, EPV_M = 1.0, 1.5                      # the estimate's position accuracy as the fix's covariance reports it [m]
-
-
-class _Schedule:
-    def __init__(self, rate_hz):
-        self.period, self.next = 1.0 / rate_hz, 0.0
-
-    def due(self, t):
-        if t + 1e-9 >= self.next:
-            self.next = max(self.next + self.period, t)
-            return True
-        return False
 
 
 class EmulatedMavros:
@@ -87,7 +77,7 @@ class EmulatedMavros:
     def _new_world(self):
         p = self.p
         self._world = self.sim
-        self.schedules = {name: _Schedule(p[name + "_hz"]) for name in (
+        self.schedules = {name: Schedule(p[name + "_hz"]) for name in (
             "heartbeat", "extended_state", "local_position", "global_position", "imu", "battery")}
         self.last_heartbeat = None   # sim time a heartbeat last reached MAVROS [s]
         self.connected = False

@@ -37,6 +37,7 @@ from .config import ConfigError
 from .frame_renderer import DeliveredFrames
 from .lockstep import LockstepGate
 from .schema import SIM_SCHEMA, validate_sim_config
+from .schedule import Schedule
 from .scheduling import fifo_priority, stepping_priority, thread_cpu_and_wait
 from .simulator import SONAR_FIELD_OF_VIEW_RAD, Simulator
 from .vehicle_odometry import VehicleOdometry
@@ -59,19 +60,6 @@ def _quaternion_msg(target, quat_wxyz):
 
 def _yaw_quaternion(yaw):
     return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
-
-
-class Schedule:
-    """Fires every ``period`` seconds of sim time."""
-
-    def __init__(self, rate_hz):
-        self.period, self.next = 1.0 / rate_hz, 0.0
-
-    def due(self, t):
-        if t + 1e-9 >= self.next:
-            self.next = max(self.next + self.period, t)
-            return True
-        return False
 
 
 class SimNode:
