@@ -389,3 +389,30 @@ def test_a_failsafe_landing_ends_in_landed_once_disarmed():
     m.landed_state, m.armed = ON_GROUND, False
     m.tick()
     assert a.phase == Phase.LANDED and "after the failsafe" in last_transition(a)
+
+
+# ----- what the stack's navdata says --------------------------------------------------------------------------------
+def test_the_reported_state_is_taking_off_from_the_request_and_landing_until_the_ground():
+    a, m = idle()
+    assert a.reported_landed_state() == ON_GROUND
+    a.request_takeoff(m.now)
+    assert a.reported_landed_state() == TAKEOFF              # acknowledged at once, motors still off
+    m.tick(PARAMS["stream_before_offboard_s"] + 0.1)
+    assert a.phase == Phase.TAKING_OFF and a.reported_landed_state() == TAKEOFF
+    m.landed_state, m.z = IN_AIR, PARAMS["takeoff_height"]
+    m.tick()
+    assert a.phase == Phase.FLYING and a.reported_landed_state() == IN_AIR
+    a.request_land(m.now)
+    assert a.reported_landed_state() == LANDING              # the detector still says IN_AIR
+    m.landed_state = ON_GROUND
+    m.tick()
+    assert a.reported_landed_state() == ON_GROUND
+
+
+def test_the_reported_state_after_a_takeover_is_the_detectors():
+    a, m = flying()
+    m.mode = "POSCTL"
+    m.tick()
+    assert a.reported_landed_state() == IN_AIR
+    a.request_resume(m.now)
+    assert a.phase == Phase.STREAMING and a.reported_landed_state() == IN_AIR   # resuming in the air: no take-off

@@ -113,7 +113,7 @@ DRONE_MODELS_DIR = os.path.join(HERE, "..", "config", "drone_models")
 DRONE_ROWS = ("platform_too_fast", "wind_strong", "drone_speed_high")
 
 
-@pytest.mark.parametrize("model", ["ardrone2", "velocity_quad"])
+@pytest.mark.parametrize("model", ["ardrone2", "px4_quad", "velocity_quad"])
 def test_every_drone_model_sets_its_envelope_and_comments_each_key(model):
     path = os.path.join(DRONE_MODELS_DIR, model + ".yaml")
     table = load_table(TABLE_PATH, path)

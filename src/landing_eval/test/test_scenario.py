@@ -83,3 +83,14 @@ def test_launch_arguments_carry_every_condition_of_the_scenario(tmp_path):
     assert args["wind_speed"] == "2.0" and args["wind_gust"] == "1.0" and args["drone_speed"] == "18.0"
     assert "drone_speed" not in dict(a.split(":=", 1) for a in runner.launch_arguments(
         scenario.load(write(tmp_path, SPEC_EXAMPLE, "plain.yaml"))))
+
+
+def test_px4_quad_is_a_drone_model_and_pilot_takeover_a_fault_of_it_only():
+    s = scenario.validate({"name": "p", "platform": {"vehicle": "car", "speed_mps": 10.0},
+                           "drone": {"model": "px4_quad"},
+                           "events": [{"at_s": 30, "fault": "pilot_takeover"}]}, "f.yaml")
+    assert s["drone"]["model"] == "px4_quad" and s["events"][0]["fault"] == "pilot_takeover"
+    assert scenario.validate({"name": "c", "platform": {"vehicle": "car"}}, "f.yaml")["drone"]["model"] == \
+        "velocity_quad"                                          # the car's default is unchanged
+    with pytest.raises(scenario.ScenarioError, match="pilot_takeover needs drone: {model: px4_quad}"):
+        scenario.validate({"name": "v", "events": [{"at_s": 3, "fault": "pilot_takeover"}]}, "f.yaml")

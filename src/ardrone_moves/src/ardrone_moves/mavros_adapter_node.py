@@ -27,7 +27,7 @@ from mavros_msgs.srv import CommandBool, SetMode
 from sensor_msgs.msg import BatteryState, Imu, Range
 from std_msgs.msg import Empty, String
 
-from .mavros_offboard import IN_AIR, LANDING, ON_GROUND, TAKEOFF, OffboardAdapter, Phase
+from .mavros_offboard import IN_AIR, LANDING, ON_GROUND, TAKEOFF, OffboardAdapter
 
 NAVDATA_STATE = {ON_GROUND: Navdata.STATE_LANDED, TAKEOFF: Navdata.STATE_TAKING_OFF, IN_AIR: Navdata.STATE_FLYING,
                  LANDING: Navdata.STATE_LANDING}
@@ -61,7 +61,6 @@ class MavrosAdapter:
         self.lock = threading.Lock()
         self.reported = 0                 # events of the core already logged
         self.status = None
-        self.landed_state = 0
         self.battery = None
         self.handles = NodeHandles()
         self.pub_setpoint = direct_publisher("mavros/setpoint_raw/local", PositionTarget)
@@ -94,7 +93,6 @@ class MavrosAdapter:
 
     def on_extended_state(self, msg):
         with self.lock:
-            self.landed_state = msg.landed_state
             self.core.on_extended_state(msg.landed_state, rospy.get_time())
 
     def on_velocity(self, msg):
@@ -143,10 +141,7 @@ class MavrosAdapter:
             c, s = math.cos(yaw), math.sin(yaw)
             vx, vy = c * east + s * north, -s * east + c * north
         with self.lock:
-            phase = self.core.phase
-        state = NAVDATA_STATE.get(self.landed_state, Navdata.STATE_UNKNOWN)
-        if phase == Phase.LANDING and state == Navdata.STATE_FLYING:
-            state = Navdata.STATE_LANDING
+            state = NAVDATA_STATE.get(self.core.reported_landed_state(), Navdata.STATE_UNKNOWN)
         self.pub_navdata.publish(Navdata(
             header=header, state=state, battery_percent=self.battery if self.battery is not None else float("nan"),
             altitude=height, vx=vx, vy=vy, vz=vz, rot_x=math.degrees(roll), rot_y=math.degrees(pitch),

@@ -188,6 +188,18 @@ class OffboardAdapter:
     def commanding(self):
         return self.phase in COMMANDING
 
+    def reported_landed_state(self):
+        """What the stack's drone/navdata should say (as a landed_state): the land detector's, except that a take-off
+        we are carrying out is TAKEOFF from the request on (as the AR.Drone reports it at once; PX4's detector says
+        ON_GROUND until the motors lift it, seconds later, and the tracker gives a take-off up that it does not see
+        acknowledged) and a landing we are carrying out is LANDING until the detector reports the ground."""
+        if self.phase in (Phase.STREAMING, Phase.ENTERING_OFFBOARD, Phase.ARMING, Phase.TAKING_OFF) \
+                and not self.resuming and self.landed_state != IN_AIR:
+            return TAKEOFF
+        if self.phase == Phase.LANDING and self.landed_state != ON_GROUND:
+            return LANDING
+        return self.landed_state
+
     # ----- what MAVROS reports ---------------------------------------------------------------------------
     def on_state(self, connected, armed, mode, now):
         """mavros/state."""

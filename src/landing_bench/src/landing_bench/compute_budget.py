@@ -33,7 +33,7 @@ NOT_THE_STACK = {"mujoco_sim": "simulator", "flight_recorder": "bag recorder", "
 # The chain's topics (absolute: the probe's roles are remapped to them), and the drone's command topic per model.
 CHAIN_TOPICS = {"image": "/ardrone/bottom/image_raw", "detection": "/platform/current_platform_position_in_ardrone",
                 "estimate": "/kalman_platform_odom", "stack_command": "/platform_tracking/cmd_vel"}
-DRONE_COMMAND = {"ardrone2": "/cmd_vel", "velocity_quad": "/ardrone/cmd_vel"}
+DRONE_COMMAND = {"ardrone2": "/cmd_vel", "px4_quad": "/mavros/setpoint_raw/local", "velocity_quad": "/ardrone/cmd_vel"}
 README_MARKERS = ("<!-- budget:start -->", "<!-- budget:end -->")
 
 

@@ -59,8 +59,10 @@ def launch_arguments(s):
         args.update(start_x=start["x"], start_y=start["y"], start_z=start["z"])
     realism = s["realism"]
     args.update(realism=realism["profile"], realism_overrides=json.dumps(realism["overrides"], separators=(",", ":")),
-                # The stack is told how its drone's firmware reports velocity (a calibration fact, not truth).
-                flow_coupling=str(realism["values"]["flow_surface_coupling"]).lower())
+                # The stack is told how its drone's firmware reports velocity (a calibration fact, not truth); a PX4
+                # reports its EKF's velocity, which fuses GPS and follows no vehicle under it.
+                flow_coupling=str(bool(realism["values"]["flow_surface_coupling"])
+                                  and s["drone"]["model"] != "px4_quad").lower())
     if "drone_speed" in c:
         args["drone_speed"] = c["drone_speed"]
     return ["%s:=%s" % (k, v) for k, v in args.items()]

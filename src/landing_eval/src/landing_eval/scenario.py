@@ -13,12 +13,14 @@ PATHS = ("straight", "circle", "figure8", "back_and_forth", "square", "stop_and_
 # on the vehicle (mujoco_sim.pads) and the detector looks for it (uav_vision's detector parameter).
 PADS = ("red_square", "apriltag")
 # The drone models the simulator flies (mujoco_sim's drone_model): ardrone2 is the AR.Drone 2.0 behind its real
-# driver's interface (ardrone_autonomy), velocity_quad the simulator's own velocity-commanded quadrotor.
-DRONE_MODELS = ("ardrone2", "velocity_quad")
+# driver's interface (ardrone_autonomy), px4_quad a PX4 quadrotor behind MAVROS (the stack's mavros_adapter),
+# velocity_quad the simulator's own velocity-commanded quadrotor.
+DRONE_MODELS = ("ardrone2", "px4_quad", "velocity_quad")
 # A scenario that names no model flies its vehicle's default.
 DEFAULT_DRONE_MODEL = {"summit_xl": "velocity_quad", "car": "velocity_quad"}
 OPERATOR_ACTIONS = ("landing", "emergency", "manual", "continue", "quit", "takeoff")
-FAULTS = ("camera_blackout", "kill_node", "detection_false_target", "link_loss")
+# pilot_takeover: the pilot flips the RC mode switch away from OFFBOARD (drone_model px4_quad only).
+FAULTS = ("camera_blackout", "kill_node", "detection_false_target", "link_loss", "pilot_takeover")
 CONDITION_PARAMS = ("wind_speed", "wind_direction_deg", "wind_gust", "drone_battery", "control_battery", "temp",
                     "drone_speed")
 OUTCOMES = ("landed_on_pad", "landed_off_pad", "emergency_landed", "crashed", "timeout", "aborted")
@@ -95,6 +97,10 @@ def validate(data, source):
         if out["drone"]["start"]["z"] < 0.3:
             raise ScenarioError("%s.start.z': a start away from the pad must be in the air (z >= 0.3 m)" % where)
     out["drone"]["model"] = model
+    if model != "px4_quad" and any(isinstance(e, dict) and e.get("fault") == "pilot_takeover" for e in
+                                   (top.get("events") or []) if isinstance(top.get("events"), list)):
+        raise ScenarioError("%s: fault pilot_takeover needs drone: {model: px4_quad} (a mode switch of PX4's RC), "
+                            "the drone is %s" % (source, model))
     out["pad"] = _choice(top.get("pad", "red_square"), "%s: field 'pad'" % source, PADS)
 
     where = "%s: field 'conditions" % source
