@@ -78,7 +78,8 @@ class MavrosAdapterTest(unittest.TestCase):
     def test_4_land_descends_and_disarms_on_the_touchdown(self):
         self.land.publish(Empty())
         self.phase("landing", "the landing")
-        self.assertLess(self.setpoints[-1].velocity.z, 0.0)
+        # (the set-point in flight when the phase changed may still be the hover's: wait for the descent's)
+        wait_for(lambda: self.setpoints[-1].velocity.z < 0.0, "a descending set-point")
         self.phase("landed", "landed and disarmed")
         self.assertEqual(self.extended[-1].landed_state, ExtendedState.LANDED_STATE_ON_GROUND)
         wait_for(lambda: not self.state[-1].armed, "disarmed in mavros/state")
